@@ -1,0 +1,229 @@
+//! Parameters of the computation and the integer constants derived from them.
+//!
+//! The pipeline works on integer pixels `p ∈ [0, 255]`. With the intensity
+//! scale `s` (SPEC §1: `f = p · s`), every SPEC quantity is an integer one
+//! times a power of `s` (see `engine` for the stage formats):
+//!
+//! | SPEC | integer form | factor |
+//! |---|---|---|
+//! | `v_c`, `v_d` | `V`, `N/det` | `s / 768` |
+//! | `D` (residual) | `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q` | `s² / 6144`, with `κ = 6144 / s` |
+//! | `a, b, c` | `A = G256 ⋆ X²`, … | `s² / 16384` |
+//! | `λ` | `Λ8 = 8 · λ · 16384 / s²` | `s² / 131072` |
+//!
+//! Derived once in [`Config::new`], so the per-pixel path only multiplies
+//! and shifts. Only the integer rounding of `κ` and `Λ8` and the 32-bit
+//! mantissa of `s / 768` depend on `s` and `λ`; at the default `s = 1/255`,
+//! `κ = 1 566 720` is exact.
+
+use fixed::types::U32F32;
+
+use crate::Error;
+
+/// Largest frame side accepted (rows and columns are counted in `u16`).
+pub const MAX_SIDE: usize = u16::MAX as usize;
+
+/// The intensity scale `s` as an exact ratio `num / den`, `0 < s ≤ 1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct IntensityScale {
+    num: u32,
+    den: u32,
+}
+
+impl IntensityScale {
+    /// The SPEC default, `f = p / 255`.
+    pub const PER_255: Self = Self { num: 1, den: 255 };
+
+    /// `s = num / den`. Refused unless `0 < s ≤ 1` and `κ = 6144 / s ≤ 2³²`
+    /// (which keeps the residual `Dn` within 41 bits).
+    pub const fn new(num: u32, den: u32) -> Result<Self, Error> {
+        if num == 0 || den == 0 || num > den || kappa_of(num, den) > 1 << 32 {
+            return Err(Error::ScaleOutOfRange);
+        }
+        Ok(Self { num, den })
+    }
+
+    /// Numerator of `s`.
+    pub const fn num(self) -> u32 {
+        self.num
+    }
+
+    /// Denominator of `s`.
+    pub const fn den(self) -> u32 {
+        self.den
+    }
+}
+
+impl Default for IntensityScale {
+    fn default() -> Self {
+        Self::PER_255
+    }
+}
+
+/// `round(6144 · den / num)`: the weight of the temporal difference in `Dn`.
+const fn kappa_of(num: u32, den: u32) -> u64 {
+    (2 * 6144 * den as u64 + num as u64) / (2 * num as u64)
+}
+
+/// The SPEC's parameters: intensity scale `s` and Tikhonov term `λ`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Params {
+    /// `f = pixel · s`.
+    pub scale: IntensityScale,
+    /// `λ` in units of `f²` per px², as an unsigned Q32.32. [`Config::new`]
+    /// needs `1 ≤ Λ8 < 2³¹` for `Λ8 = round(131072 · λ / s²)`: at the
+    /// default scale `1.9e-12 ≤ λ < 0.25`; at smaller scales both ends shrink with `s²`.
+    pub lambda: U32F32,
+}
+
+impl Params {
+    /// `λ = 1e-4` rounded to Q32.32 (`429 497 / 2³²`, relative error 6e-7).
+    pub const DEFAULT_LAMBDA: U32F32 = U32F32::from_bits(429_497);
+
+    /// SPEC defaults: `s = 1/255`, `λ = 1e-4`.
+    pub const DEFAULT: Self = Self {
+        scale: IntensityScale::PER_255,
+        lambda: Self::DEFAULT_LAMBDA,
+    };
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// A validated frame geometry and parameter set, with the integer constants
+/// the per-pixel path uses. Building one is the only place the computation
+/// can fail; everything downstream is infallible.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config {
+    width: u16,
+    height: u16,
+    params: Params,
+    /// `κ = round(6144 / s) ∈ [6144, 2³²]`.
+    pub(crate) kappa: i64,
+    /// `Λ8 = round(131072 · λ / s²) ∈ [1, 2³¹)`: λ in eighths of the `A` unit.
+    pub(crate) lambda8: u32,
+    /// `s · 2¹⁶ / 768 ≈ c_mant · 2^−c_exp`, `c_mant ∈ [2³¹, 2³²)`: turns `V`
+    /// and `N/det` into Q16.16 pixels.
+    pub(crate) c_mant: u32,
+    pub(crate) c_exp: u32,
+}
+
+impl Config {
+    /// Validate a frame size and parameters.
+    pub fn new(width: usize, height: usize, params: Params) -> Result<Self, Error> {
+        if width == 0 || height == 0 {
+            return Err(Error::EmptyFrame);
+        }
+        let (Ok(w), Ok(h)) = (u16::try_from(width), u16::try_from(height)) else {
+            return Err(Error::FrameTooLarge);
+        };
+        let IntensityScale { num, den } = params.scale;
+        // `IntensityScale::new` checked the scale; a hand-built value cannot exist.
+        let kappa = kappa_of(num, den) as i64;
+        // Λ8 = round(λ_bits · 2⁻³² · 2¹⁷ · den² / num²) = round(λ_bits · den² / (2¹⁵ · num²)).
+        let (num, den) = (num as u128, den as u128);
+        let lambda_bits = params.lambda.to_bits() as u128;
+        let lambda_den = (num * num) << 15;
+        let lambda8 = (lambda_bits * den * den + lambda_den / 2) / lambda_den;
+        // A8 = 8·A ≤ 2 130 739 200; A8 + Λ8 must stay below 2³².
+        if lambda8 == 0 || lambda8 >= 1 << 31 {
+            return Err(Error::LambdaOutOfRange);
+        }
+        // c = 256·num / (3·den) ∈ [1.2e-4, 85.4]: find c_exp with c·2^c_exp ∈ [2³¹, 2³²).
+        let (c_num, c_den) = (256 * num, 3 * den);
+        let mut c_exp = 31u32;
+        while (c_num << c_exp) / c_den >= 1 << 32 {
+            c_exp -= 1;
+        }
+        while (c_num << c_exp) / c_den < 1 << 31 {
+            c_exp += 1;
+        }
+        Ok(Self {
+            width: w,
+            height: h,
+            params,
+            kappa,
+            lambda8: lambda8 as u32,
+            c_mant: ((c_num << c_exp) / c_den) as u32,
+            c_exp,
+        })
+    }
+
+    /// Frame width in pixels.
+    pub const fn width(&self) -> usize {
+        self.width as usize
+    }
+
+    /// Frame height in pixels.
+    pub const fn height(&self) -> usize {
+        self.height as usize
+    }
+
+    /// The parameters this configuration was built from.
+    pub const fn params(&self) -> Params {
+        self.params
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_constants_are_the_exact_integers() {
+        let c = Config::new(4, 4, Params::DEFAULT).unwrap();
+        assert_eq!(c.kappa, 6144 * 255);
+        // 131072 · 1e-4 · 255² = 852 295.68; λ is 1e-4 to 6e-7.
+        assert_eq!(c.lambda8, 852_296);
+        let c_true = 256.0 / (3.0 * 255.0);
+        let c_fixed = c.c_mant as f64 / (1u64 << c.c_exp) as f64;
+        assert!((c_fixed / c_true - 1.0).abs() < 1e-9);
+        assert!(c.c_mant >= 1 << 31);
+    }
+
+    #[test]
+    fn scale_and_lambda_limits_are_typed_errors() {
+        assert_eq!(IntensityScale::new(0, 1), Err(Error::ScaleOutOfRange));
+        assert_eq!(IntensityScale::new(2, 1), Err(Error::ScaleOutOfRange));
+        assert_eq!(IntensityScale::new(1, 0), Err(Error::ScaleOutOfRange));
+        assert_eq!(
+            IntensityScale::new(1, 1_000_000),
+            Err(Error::ScaleOutOfRange)
+        );
+        assert!(IntensityScale::new(1, 1).is_ok());
+        let zero = Params {
+            lambda: U32F32::ZERO,
+            ..Params::DEFAULT
+        };
+        assert_eq!(Config::new(1, 1, zero), Err(Error::LambdaOutOfRange));
+        let huge = Params {
+            lambda: U32F32::from_num(1),
+            ..Params::DEFAULT
+        };
+        assert_eq!(Config::new(1, 1, huge), Err(Error::LambdaOutOfRange));
+        assert_eq!(Config::new(0, 1, Params::DEFAULT), Err(Error::EmptyFrame));
+        assert_eq!(
+            Config::new(1, 70_000, Params::DEFAULT),
+            Err(Error::FrameTooLarge)
+        );
+    }
+
+    #[test]
+    fn every_admissible_scale_gives_a_normalised_mantissa() {
+        for (num, den) in [(1, 1), (1, 255), (3, 7), (1, 699_050), (255, 256)] {
+            let scale = IntensityScale::new(num, den).unwrap();
+            // A λ whose Λ8 is about 1000 at this scale, or the smallest λ.
+            let s = f64::from(num) / f64::from(den);
+            let lambda = U32F32::from_num(1000.0 * s * s / 131_072.0).max(U32F32::DELTA);
+            let c = Config::new(1, 1, Params { scale, lambda }).unwrap();
+            assert!(c.c_mant >= 1 << 31, "{num}/{den}");
+            assert!((6144..=1 << 32).contains(&c.kappa), "{num}/{den}");
+        }
+    }
+}

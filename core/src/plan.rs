@@ -1,0 +1,117 @@
+//! How a frame is cut into tiles for an engine of a given capacity.
+
+use crate::{Config, Error, HALO};
+
+/// One output tile: columns `[x, x + width)`, rows `[y, y + height)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Tile {
+    /// First column.
+    pub x: usize,
+    /// First row.
+    pub y: usize,
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+}
+
+/// A validated tiling of a frame for an [`Engine<COLS>`](crate::Engine): tiles
+/// of `tile_width × tile_height` in row-major order, the last ones in each
+/// row and column cut at the frame's edge. Any tiling gives the same bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Plan<const COLS: usize> {
+    config: Config,
+    tile_width: usize,
+    tile_height: usize,
+}
+
+impl<const COLS: usize> Plan<COLS> {
+    /// Tiles of `tile_width × tile_height` (each at least 1; larger than the
+    /// frame means the whole frame). The width must fit the engine:
+    /// `tile_width ≤ COLS − 14`, unless the frame itself is narrower.
+    pub fn new(config: Config, tile_width: usize, tile_height: usize) -> Result<Self, Error> {
+        if tile_width == 0 || tile_height == 0 {
+            return Err(Error::TileOutOfFrame);
+        }
+        let max = COLS.saturating_sub(2 * HALO);
+        let tile_width = tile_width.min(config.width());
+        if tile_width > max {
+            return Err(Error::TileTooWide { max });
+        }
+        Ok(Self {
+            config,
+            tile_width,
+            tile_height: tile_height.min(config.height()),
+        })
+    }
+
+    /// The widest strips this engine allows, each the full frame height.
+    pub fn strips(config: Config) -> Result<Self, Error> {
+        Self::new(config, COLS.saturating_sub(2 * HALO), config.height())
+    }
+
+    /// The configuration this plan tiles.
+    pub const fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Tile width (at most the frame width).
+    pub const fn tile_width(&self) -> usize {
+        self.tile_width
+    }
+
+    /// Tile height (at most the frame height).
+    pub const fn tile_height(&self) -> usize {
+        self.tile_height
+    }
+
+    /// Tiles per row of tiles.
+    pub const fn tiles_across(&self) -> usize {
+        self.config.width().div_ceil(self.tile_width)
+    }
+
+    /// Rows of tiles.
+    pub const fn tiles_down(&self) -> usize {
+        self.config.height().div_ceil(self.tile_height)
+    }
+
+    /// Number of tiles.
+    pub const fn tile_count(&self) -> usize {
+        self.tiles_across() * self.tiles_down()
+    }
+
+    /// Tile `index` in row-major order (`None` past the last).
+    pub fn tile(&self, index: usize) -> Option<Tile> {
+        if index >= self.tile_count() {
+            return None;
+        }
+        let (tx, ty) = (index % self.tiles_across(), index / self.tiles_across());
+        let (x, y) = (tx * self.tile_width, ty * self.tile_height);
+        Some(Tile {
+            x,
+            y,
+            width: self.tile_width.min(self.config.width() - x),
+            height: self.tile_height.min(self.config.height() - y),
+        })
+    }
+
+    /// Every tile, in row-major order.
+    pub fn tiles(&self) -> impl Iterator<Item = Tile> + '_ {
+        (0..self.tile_count()).filter_map(|i| self.tile(i))
+    }
+
+    /// Pixels the first stage computes (each tile with its 7-px halo on
+    /// every side) and output pixels: their ratio is the tiling's overhead.
+    pub fn first_stage_pixels(&self) -> (u64, u64) {
+        let computed = self
+            .tiles()
+            .map(|t| ((t.width + 2 * HALO) * (t.height + 2 * HALO)) as u64)
+            .sum();
+        (
+            computed,
+            (self.config.width() * self.config.height()) as u64,
+        )
+    }
+}

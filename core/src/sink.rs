@@ -1,0 +1,166 @@
+//! Ready-made sinks: field planes, the RGB representation, and extremes.
+
+use fixed::types::{I16F16, U16F16};
+
+use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Sink};
+
+/// Check that an output plane holds a whole frame.
+fn check_len(config: &Config, len: usize, per_pixel: usize) -> Result<(), Error> {
+    let needed = config.width() * config.height() * per_pixel;
+    if len < needed {
+        return Err(Error::BufferTooShort { needed, got: len });
+    }
+    Ok(())
+}
+
+/// The pixels of one output row segment inside a row-major plane.
+fn segment<T>(
+    plane: &mut [T],
+    width: usize,
+    per_pixel: usize,
+    y: usize,
+    x: usize,
+    len: usize,
+) -> &mut [T] {
+    let start = (y * width + x) * per_pixel;
+    plane
+        .get_mut(start..start + len * per_pixel)
+        .unwrap_or(&mut [])
+}
+
+/// Which field planes [`FieldPlanes`] writes; `None` skips a plane.
+#[derive(Debug, Default)]
+pub struct FieldPlanes<'a> {
+    /// `v_c` x, row-major, `width · height`.
+    pub v_c_x: Option<&'a mut [I16F16]>,
+    /// `v_c` y.
+    pub v_c_y: Option<&'a mut [I16F16]>,
+    /// `v_d` x.
+    pub v_d_x: Option<&'a mut [I16F16]>,
+    /// `v_d` y.
+    pub v_d_y: Option<&'a mut [I16F16]>,
+    /// `|v_c|`.
+    pub m_c: Option<&'a mut [U16F16]>,
+    /// `|v_d|`.
+    pub m_d: Option<&'a mut [U16F16]>,
+}
+
+/// A sink that writes the fields into caller-provided planes.
+#[derive(Debug)]
+pub struct FieldSink<'a> {
+    planes: FieldPlanes<'a>,
+    width: usize,
+}
+
+impl<'a> FieldSink<'a> {
+    /// Check every given plane against the frame size.
+    pub fn new(config: &Config, planes: FieldPlanes<'a>) -> Result<Self, Error> {
+        let lens = [
+            planes.v_c_x.as_ref().map(|p| p.len()),
+            planes.v_c_y.as_ref().map(|p| p.len()),
+            planes.v_d_x.as_ref().map(|p| p.len()),
+            planes.v_d_y.as_ref().map(|p| p.len()),
+            planes.m_c.as_ref().map(|p| p.len()),
+            planes.m_d.as_ref().map(|p| p.len()),
+        ];
+        for len in lens.into_iter().flatten() {
+            check_len(config, len, 1)?;
+        }
+        Ok(Self {
+            planes,
+            width: config.width(),
+        })
+    }
+}
+
+fn write_plane<T: Copy>(
+    plane: &mut Option<&mut [T]>,
+    width: usize,
+    y: usize,
+    x: usize,
+    pixels: &[FlowPixel],
+    value: impl Fn(&FlowPixel) -> T,
+) {
+    if let Some(plane) = plane {
+        for (dst, px) in segment(plane, width, 1, y, x, pixels.len())
+            .iter_mut()
+            .zip(pixels)
+        {
+            *dst = value(px);
+        }
+    }
+}
+
+impl Sink for FieldSink<'_> {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let (p, w) = (&mut self.planes, self.width);
+        write_plane(&mut p.v_c_x, w, y, x, pixels, |px| px.v_c[0]);
+        write_plane(&mut p.v_c_y, w, y, x, pixels, |px| px.v_c[1]);
+        write_plane(&mut p.v_d_x, w, y, x, pixels, |px| px.v_d[0]);
+        write_plane(&mut p.v_d_y, w, y, x, pixels, |px| px.v_d[1]);
+        write_plane(&mut p.m_c, w, y, x, pixels, |px| px.m_c);
+        write_plane(&mut p.m_d, w, y, x, pixels, |px| px.m_d);
+    }
+}
+
+/// The representation's bytes `[R, G, B] = [|v_d|, |v_c|, fⁿ]` of one pixel.
+#[inline(always)]
+pub fn rgb(px: &FlowPixel, scale_d: &ByteScale, scale_c: &ByteScale) -> [u8; 3] {
+    [scale_d.byte(px.m_d), scale_c.byte(px.m_c), px.luma]
+}
+
+/// A sink that writes the RGB8 representation into a row-major plane of
+/// `3 · width · height` bytes.
+#[derive(Debug)]
+pub struct RgbSink<'a> {
+    rgb: &'a mut [u8],
+    width: usize,
+    scale_d: ByteScale,
+    scale_c: ByteScale,
+}
+
+impl<'a> RgbSink<'a> {
+    /// Check the plane's size; bytes are made with these two scales.
+    pub fn new(
+        config: &Config,
+        rgb: &'a mut [u8],
+        scale_d: ByteScale,
+        scale_c: ByteScale,
+    ) -> Result<Self, Error> {
+        check_len(config, rgb.len(), 3)?;
+        Ok(Self {
+            rgb,
+            width: config.width(),
+            scale_d,
+            scale_c,
+        })
+    }
+}
+
+impl Sink for RgbSink<'_> {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let out = segment(self.rgb, self.width, 3, y, x, pixels.len());
+        for (dst, px) in out.chunks_exact_mut(3).zip(pixels) {
+            dst.copy_from_slice(&rgb(px, &self.scale_d, &self.scale_c));
+        }
+    }
+}
+
+/// A sink that records the extremes of both magnitudes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ExtremesSink {
+    /// Extremes of `|v_d|`.
+    pub m_d: Extremes,
+    /// Extremes of `|v_c|`.
+    pub m_c: Extremes,
+}
+
+impl Sink for ExtremesSink {
+    fn row(&mut self, _y: usize, _x: usize, pixels: &[FlowPixel]) {
+        for px in pixels {
+            self.m_d.add(px.m_d);
+            self.m_c.add(px.m_c);
+        }
+    }
+}
