@@ -188,10 +188,6 @@ impl<const COLS: usize> Engine<COLS> {
         };
     }
 
-    pub(crate) fn window(&self) -> &Window {
-        &self.window
-    }
-
     /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
     /// frame width) and run every stage it completes.
     pub(crate) fn push<S: Sink>(

@@ -44,6 +44,7 @@ mod scale;
 mod sink;
 mod solve;
 mod stages;
+mod stream;
 
 pub use engine::{Engine, FlowPixel, HALO, Sink};
 pub use error::Error;
@@ -52,5 +53,6 @@ pub use frames::{Frame, FramePair};
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
 pub use plan::{Plan, Tile};
 pub use represent::{byte_scales, represent};
-pub use scale::{ByteScale, Extremes, Scaling};
+pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
 pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb};
+pub use stream::RowStream;

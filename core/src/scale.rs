@@ -165,3 +165,36 @@ mod tests {
         assert_eq!(tiny.byte(U16F16::MAX), 255);
     }
 }
+
+/// Streaming min–max (not the SPEC's `PerFrameMinMax`): each frame's bytes
+/// use the extremes of the frame before it, so bytes leave in one pass. The
+/// first frame uses the scales given at construction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PreviousFrameMinMax {
+    scales: (ByteScale, ByteScale),
+    seen: crate::ExtremesSink,
+}
+
+impl PreviousFrameMinMax {
+    /// Start with these scales of `|v_d|` and `|v_c|` for the first frame.
+    pub fn new(first_d: ByteScale, first_c: ByteScale) -> Self {
+        Self { scales: (first_d, first_c), seen: crate::ExtremesSink::default() }
+    }
+
+    /// The scales of `|v_d|` and `|v_c|` for the frame being computed.
+    pub fn scales(&self) -> (ByteScale, ByteScale) {
+        self.scales
+    }
+
+    /// Feed this sink every pixel of the frame being computed.
+    pub fn tracker(&mut self) -> &mut crate::ExtremesSink {
+        &mut self.seen
+    }
+
+    /// The frame is complete: its extremes become the next frame's scales.
+    pub fn end_frame(&mut self) {
+        self.scales = (self.seen.m_d.byte_scale(), self.seen.m_c.byte_scale());
+        self.seen = crate::ExtremesSink::default();
+    }
+}

@@ -1,0 +1,153 @@
+//! Shared helpers of the integration tests: frame generators and whole-frame
+//! runs of the fixed core that collect every output pixel.
+
+use reynoldsflow_core::{Config, Engine, FlowPixel, FramePair, Plan, RowStream, Sink};
+
+/// Columns of the test engine: tiles up to 200 px wide.
+pub const COLS: usize = 214;
+
+/// The engine the tests use (boxed: about 65 KiB).
+pub fn engine() -> Box<Engine<COLS>> {
+    Box::new(Engine::new())
+}
+
+/// Every output pixel of a frame, row-major.
+pub struct PixelPlane {
+    pub width: usize,
+    pub pixels: Vec<FlowPixel>,
+    /// Output rows in the order they arrived: (y, x, len).
+    pub rows: Vec<(usize, usize, usize)>,
+}
+
+impl PixelPlane {
+    pub fn new(config: &Config) -> Self {
+        let n = config.width() * config.height();
+        Self { width: config.width(), pixels: vec![FlowPixel::default(); n], rows: Vec::new() }
+    }
+}
+
+impl Sink for PixelPlane {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let start = y * self.width + x;
+        self.pixels[start..start + pixels.len()].copy_from_slice(pixels);
+        self.rows.push((y, x, pixels.len()));
+    }
+}
+
+/// The whole frame computed with tiles of `tile` (width, height).
+pub fn run_tiled(config: &Config, prev: &[u8], next: &[u8], tile: (usize, usize)) -> PixelPlane {
+    let plan = Plan::<COLS>::new(*config, tile.0, tile.1).expect("tile fits the test engine");
+    let frames = FramePair::packed(config, prev, next).expect("frames of the config's size");
+    let mut out = PixelPlane::new(config);
+    engine().run(&plan, &frames, &mut out).expect("sizes match");
+    out
+}
+
+/// The whole frame fed row by row through column strips of `strip` px.
+pub fn run_streamed(config: &Config, prev: &[u8], next: &[u8], strip: usize) -> PixelPlane {
+    let (w, h) = (config.width(), config.height());
+    let mut out = PixelPlane::new(config);
+    let starts: Vec<usize> = (0..w).step_by(strip).collect();
+    let mut engines: Vec<_> = starts.iter().map(|_| engine()).collect();
+    let mut streams: Vec<_> = engines
+        .iter_mut()
+        .zip(&starts)
+        .map(|(e, &x)| RowStream::new(e, *config, x, strip.min(w - x)).expect("strip fits"))
+        .collect();
+    for y in 0..h {
+        for s in &mut streams {
+            s.push(&prev[y * w..(y + 1) * w], &next[y * w..(y + 1) * w], &mut out).expect("row accepted");
+        }
+    }
+    assert!(streams.iter().all(|s| s.is_finished()));
+    out
+}
+
+/// Kinds of frame pairs the property tests draw from.
+#[derive(Clone, Copy, Debug)]
+pub enum Pattern {
+    /// Independent uniform noise in both frames.
+    Random,
+    /// A smooth texture moving by a fraction of a pixel.
+    Smooth,
+    /// Noise shifted by one pixel right and down.
+    Shifted,
+    /// Both frames black.
+    AllZero,
+    /// Both frames white.
+    AllFull,
+    /// A 0/255 step edge moving by two pixels, touching the frame's border.
+    SaturatedEdge,
+}
+
+impl Pattern {
+    pub const ALL: [Pattern; 6] = [
+        Pattern::Random,
+        Pattern::Smooth,
+        Pattern::Shifted,
+        Pattern::AllZero,
+        Pattern::AllFull,
+        Pattern::SaturatedEdge,
+    ];
+}
+
+/// xorshift64*: a fixed, seedable generator for test frames.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    pub fn byte(&mut self) -> u8 {
+        (self.next_u64() >> 56) as u8
+    }
+
+    /// Uniform in `[0, 1)`.
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A frame pair of `w × h` of the given pattern.
+pub fn frame_pair(pattern: Pattern, w: usize, h: usize, seed: u64) -> (Vec<u8>, Vec<u8>) {
+    let mut rng = Rng::new(seed);
+    let n = w * h;
+    match pattern {
+        Pattern::Random => ((0..n).map(|_| rng.byte()).collect(), (0..n).map(|_| rng.byte()).collect()),
+        Pattern::Smooth => {
+            let (fx, fy, phase) = (0.05 + 0.3 * rng.unit(), 0.05 + 0.3 * rng.unit(), 6.0 * rng.unit());
+            let (dx, dy) = (rng.unit() - 0.5, rng.unit() - 0.5);
+            let texture = |x: f64, y: f64| {
+                let v = 127.5 + 60.0 * (fx * x + phase).sin() + 60.0 * (fy * y - phase).cos();
+                v.round().clamp(0.0, 255.0) as u8
+            };
+            let frame = |sx: f64, sy: f64| -> Vec<u8> {
+                (0..n).map(|i| texture((i % w) as f64 - sx, (i / w) as f64 - sy)).collect()
+            };
+            (frame(0.0, 0.0), frame(dx, dy))
+        }
+        Pattern::Shifted => {
+            let (bw, bh) = (w + 1, h + 1);
+            let big: Vec<u8> = (0..bw * bh).map(|_| rng.byte()).collect();
+            let crop = |ox: usize, oy: usize| -> Vec<u8> {
+                (0..n).map(|i| big[(i / w + oy) * bw + i % w + ox]).collect()
+            };
+            (crop(1, 1), crop(0, 0))
+        }
+        Pattern::AllZero => (vec![0; n], vec![0; n]),
+        Pattern::AllFull => (vec![255; n], vec![255; n]),
+        Pattern::SaturatedEdge => {
+            let edge = (rng.next_u64() % (w as u64 + 1)) as usize;
+            let step = |e: usize| -> Vec<u8> { (0..n).map(|i| if i % w < e { 255 } else { 0 }).collect() };
+            (step(edge), step((edge + 2).min(w)))
+        }
+    }
+}
