@@ -81,7 +81,7 @@ pub(crate) struct Window {
 }
 
 /// All working memory of the computation, for tiles up to `COLS − 14`
-/// columns wide. About `304 · COLS` bytes: see [`Engine::WORKING_BYTES`].
+/// columns wide: `304 · COLS` bytes and a few more ([`working_bytes`]).
 pub struct Engine<const COLS: usize> {
     p0: RowRing<u8, COLS, 8>,
     d: RowRing<i16, COLS, 6>,
@@ -104,7 +104,8 @@ impl<const COLS: usize> Engine<COLS> {
         COLS - 2 * HALO
     };
 
-    /// Bytes of working memory: everything the engine owns.
+    /// Bytes of working memory: everything the engine owns
+    /// (`= working_bytes(COLS)`).
     pub const WORKING_BYTES: usize = core::mem::size_of::<Self>();
 
     /// A zeroed engine (`const`, so it can live in a `static`).
@@ -273,6 +274,18 @@ impl<const COLS: usize> Engine<COLS> {
     }
 }
 
+/// Bytes per window column: rings of `p0` (8 rows × 1 B), `d` (6 × 2),
+/// `E` (5 × 8), `V` (4 × 8), the sums (5 × 12 and 5 × 16), one row each of
+/// the vertical parts (8 + 8) and products (12 + 16), and the output row (28).
+const BYTES_PER_COLUMN: usize = 8 + 12 + 40 + 32 + 60 + 80 + 8 + 8 + 12 + 16 + 28;
+
+/// Working bytes of an `Engine<cols>`, for choosing `COLS` at run time
+/// (budgets, the `budget` command): equal to `Engine::<cols>::WORKING_BYTES`.
+pub const fn working_bytes(cols: usize) -> usize {
+    let align = core::mem::align_of::<Engine<16>>();
+    (BYTES_PER_COLUMN * cols + core::mem::size_of::<Window>()).next_multiple_of(align)
+}
+
 impl<const COLS: usize> Default for Engine<COLS> {
     fn default() -> Self {
         Self::new()
@@ -287,4 +300,18 @@ fn check_size(config: &Config, frames: &FramePair<'_>) -> Result<(), Error> {
         return Err(Error::SizeMismatch);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn working_bytes_formula_is_the_struct_size() {
+        assert_eq!(working_bytes(15), Engine::<15>::WORKING_BYTES);
+        assert_eq!(working_bytes(78), Engine::<78>::WORKING_BYTES);
+        assert_eq!(working_bytes(94), Engine::<94>::WORKING_BYTES);
+        assert_eq!(working_bytes(142), Engine::<142>::WORKING_BYTES);
+        assert_eq!(working_bytes(655), Engine::<655>::WORKING_BYTES);
+    }
 }

@@ -46,7 +46,7 @@ mod solve;
 mod stages;
 mod stream;
 
-pub use engine::{Engine, FlowPixel, HALO, Sink};
+pub use engine::{Engine, FlowPixel, HALO, Sink, working_bytes};
 pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};

@@ -74,7 +74,8 @@ pub struct Params {
     pub scale: IntensityScale,
     /// `λ` in units of `f²` per px², as an unsigned Q32.32. [`Config::new`]
     /// needs `1 ≤ Λ8 < 2³¹` for `Λ8 = round(131072 · λ / s²)`: at the
-    /// default scale `1.9e-12 ≤ λ < 0.25`; at smaller scales both ends shrink with `s²`.
+    /// default scale any λ from 2⁻³² up to 0.25; the upper end shrinks with
+    /// `s²`, so very small scales need very small λ.
     pub lambda: U32F32,
 }
 

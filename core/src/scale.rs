@@ -179,7 +179,10 @@ pub struct PreviousFrameMinMax {
 impl PreviousFrameMinMax {
     /// Start with these scales of `|v_d|` and `|v_c|` for the first frame.
     pub fn new(first_d: ByteScale, first_c: ByteScale) -> Self {
-        Self { scales: (first_d, first_c), seen: crate::ExtremesSink::default() }
+        Self {
+            scales: (first_d, first_c),
+            seen: crate::ExtremesSink::default(),
+        }
     }
 
     /// The scales of `|v_d|` and `|v_c|` for the frame being computed.

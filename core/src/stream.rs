@@ -19,12 +19,19 @@ pub struct RowStream<'e, const COLS: usize> {
 
 impl<'e, const COLS: usize> RowStream<'e, COLS> {
     /// Stream the strip `[x, x + width)` of frames of `config`'s size.
-    pub fn new(engine: &'e mut Engine<COLS>, config: Config, x: usize, width: usize) -> Result<Self, Error> {
+    pub fn new(
+        engine: &'e mut Engine<COLS>,
+        config: Config,
+        x: usize,
+        width: usize,
+    ) -> Result<Self, Error> {
         if width == 0 || x.checked_add(width).is_none_or(|end| end > config.width()) {
             return Err(Error::TileOutOfFrame);
         }
         if width > Engine::<COLS>::MAX_TILE_WIDTH {
-            return Err(Error::TileTooWide { max: Engine::<COLS>::MAX_TILE_WIDTH });
+            return Err(Error::TileTooWide {
+                max: Engine::<COLS>::MAX_TILE_WIDTH,
+            });
         }
         engine.begin(Window {
             x_first: x as isize - HALO as isize,
@@ -32,7 +39,11 @@ impl<'e, const COLS: usize> RowStream<'e, COLS> {
             y_first: -(HALO as isize),
             t: 0,
         });
-        Ok(Self { engine, config, rows_in: 0 })
+        Ok(Self {
+            engine,
+            config,
+            rows_in: 0,
+        })
     }
 
     /// Stream the whole frame width as one strip.

@@ -22,7 +22,11 @@ pub struct PixelPlane {
 impl PixelPlane {
     pub fn new(config: &Config) -> Self {
         let n = config.width() * config.height();
-        Self { width: config.width(), pixels: vec![FlowPixel::default(); n], rows: Vec::new() }
+        Self {
+            width: config.width(),
+            pixels: vec![FlowPixel::default(); n],
+            rows: Vec::new(),
+        }
     }
 }
 
@@ -56,7 +60,12 @@ pub fn run_streamed(config: &Config, prev: &[u8], next: &[u8], strip: usize) -> 
         .collect();
     for y in 0..h {
         for s in &mut streams {
-            s.push(&prev[y * w..(y + 1) * w], &next[y * w..(y + 1) * w], &mut out).expect("row accepted");
+            s.push(
+                &prev[y * w..(y + 1) * w],
+                &next[y * w..(y + 1) * w],
+                &mut out,
+            )
+            .expect("row accepted");
         }
     }
     assert!(streams.iter().all(|s| s.is_finished()));
@@ -121,16 +130,25 @@ pub fn frame_pair(pattern: Pattern, w: usize, h: usize, seed: u64) -> (Vec<u8>, 
     let mut rng = Rng::new(seed);
     let n = w * h;
     match pattern {
-        Pattern::Random => ((0..n).map(|_| rng.byte()).collect(), (0..n).map(|_| rng.byte()).collect()),
+        Pattern::Random => (
+            (0..n).map(|_| rng.byte()).collect(),
+            (0..n).map(|_| rng.byte()).collect(),
+        ),
         Pattern::Smooth => {
-            let (fx, fy, phase) = (0.05 + 0.3 * rng.unit(), 0.05 + 0.3 * rng.unit(), 6.0 * rng.unit());
+            let (fx, fy, phase) = (
+                0.05 + 0.3 * rng.unit(),
+                0.05 + 0.3 * rng.unit(),
+                6.0 * rng.unit(),
+            );
             let (dx, dy) = (rng.unit() - 0.5, rng.unit() - 0.5);
             let texture = |x: f64, y: f64| {
                 let v = 127.5 + 60.0 * (fx * x + phase).sin() + 60.0 * (fy * y - phase).cos();
                 v.round().clamp(0.0, 255.0) as u8
             };
             let frame = |sx: f64, sy: f64| -> Vec<u8> {
-                (0..n).map(|i| texture((i % w) as f64 - sx, (i / w) as f64 - sy)).collect()
+                (0..n)
+                    .map(|i| texture((i % w) as f64 - sx, (i / w) as f64 - sy))
+                    .collect()
             };
             (frame(0.0, 0.0), frame(dx, dy))
         }
@@ -138,7 +156,9 @@ pub fn frame_pair(pattern: Pattern, w: usize, h: usize, seed: u64) -> (Vec<u8>, 
             let (bw, bh) = (w + 1, h + 1);
             let big: Vec<u8> = (0..bw * bh).map(|_| rng.byte()).collect();
             let crop = |ox: usize, oy: usize| -> Vec<u8> {
-                (0..n).map(|i| big[(i / w + oy) * bw + i % w + ox]).collect()
+                (0..n)
+                    .map(|i| big[(i / w + oy) * bw + i % w + ox])
+                    .collect()
             };
             (crop(1, 1), crop(0, 0))
         }
@@ -146,7 +166,8 @@ pub fn frame_pair(pattern: Pattern, w: usize, h: usize, seed: u64) -> (Vec<u8>, 
         Pattern::AllFull => (vec![255; n], vec![255; n]),
         Pattern::SaturatedEdge => {
             let edge = (rng.next_u64() % (w as u64 + 1)) as usize;
-            let step = |e: usize| -> Vec<u8> { (0..n).map(|i| if i % w < e { 255 } else { 0 }).collect() };
+            let step =
+                |e: usize| -> Vec<u8> { (0..n).map(|i| if i % w < e { 255 } else { 0 }).collect() };
             (step(edge), step((edge + 2).min(w)))
         }
     }

@@ -38,7 +38,11 @@ fn small_tiles_cover_every_pixel_once() {
     for tile in [(1, 1), (1, h), (w, 1), (5, 3), (22, 16)] {
         let tiled = run_tiled(&config, &prev, &next, tile);
         assert!(tiled.pixels == whole, "tile {tile:?}");
-        assert_eq!(tiled.rows.iter().map(|r| r.2).sum::<usize>(), w * h, "tile {tile:?}");
+        assert_eq!(
+            tiled.rows.iter().map(|r| r.2).sum::<usize>(),
+            w * h,
+            "tile {tile:?}"
+        );
     }
 }
 
@@ -59,8 +63,14 @@ fn streamed_output_leaves_seven_rows_behind_the_input() {
     let mut stream = RowStream::full_width(&mut engine, config).unwrap();
     let mut log = Log(Vec::new());
     for y in 0..h {
-        stream.push(&prev[y * w..][..w], &next[y * w..][..w], &mut log).unwrap();
-        let expected: Vec<usize> = if y + 1 == h { (0..h).collect() } else { (0..(y + 1).saturating_sub(7)).collect() };
+        stream
+            .push(&prev[y * w..][..w], &next[y * w..][..w], &mut log)
+            .unwrap();
+        let expected: Vec<usize> = if y + 1 == h {
+            (0..h).collect()
+        } else {
+            (0..(y + 1).saturating_sub(7)).collect()
+        };
         assert_eq!(log.0, expected, "after input row {y}");
     }
     assert_eq!(
