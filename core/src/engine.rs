@@ -14,7 +14,8 @@ use fixed::types::{I16F16, U16F16};
 
 use crate::ring::RowRing;
 use crate::solve::{curl_free_q16, divergence_free_q16, magnitude_q16};
-use crate::stages::{ResidualInputs, boundary_minus_domain, smooth, structure_row, structure_sums};
+use crate::solve::StructureSums;
+use crate::stages::{Products, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial};
 use crate::{Config, Error, FramePair, Plan, Tile};
 
 /// Radius of input that one output pixel depends on (SPEC §6).
@@ -82,19 +83,21 @@ pub(crate) struct Window {
 
 /// All working memory of the computation, for tiles up to `COLS − 14`
 /// columns wide: `304 · COLS` bytes and a few more ([`working_bytes`]).
+/// Each channel has its own plane of rows, so the row loops vectorise.
+/// `repr(C)`, widest fields first, so [`working_bytes`] can follow the layout.
+#[repr(C)]
 pub struct Engine<const COLS: usize> {
-    p0: RowRing<u8, COLS, 8>,
-    d: RowRing<i16, COLS, 6>,
-    e: RowRing<[i32; 2], COLS, 5>,
-    v: RowRing<[i32; 2], COLS, 4>,
-    sum3: RowRing<[i32; 3], COLS, 5>,
-    sum2: RowRing<[i64; 2], COLS, 5>,
-    vert_d: [[i16; 4]; COLS],
-    vert_e: [[i32; 2]; COLS],
-    prod3: [[i32; 3]; COLS],
-    prod2: [[i64; 2]; COLS],
-    out: [FlowPixel; COLS],
     window: Window,
+    sums_wide: [RowRing<i64, COLS, 5>; 2],
+    products: Products<COLS>,
+    sums_small: [RowRing<i32, COLS, 5>; 3],
+    e: [RowRing<i32, COLS, 5>; 2],
+    v: [RowRing<i32, COLS, 4>; 2],
+    vert_e: [[i32; COLS]; 2],
+    out: [FlowPixel; COLS],
+    d: RowRing<i16, COLS, 6>,
+    vert_d: [[i16; COLS]; 4],
+    p0: RowRing<u8, COLS, 8>,
 }
 
 impl<const COLS: usize> Engine<COLS> {
@@ -114,32 +117,21 @@ impl<const COLS: usize> Engine<COLS> {
         Self {
             p0: RowRing::new(0),
             d: RowRing::new(0),
-            e: RowRing::new([0; 2]),
-            v: RowRing::new([0; 2]),
-            sum3: RowRing::new([0; 3]),
-            sum2: RowRing::new([0; 2]),
-            vert_d: [[0; 4]; COLS],
-            vert_e: [[0; 2]; COLS],
-            prod3: [[0; 3]; COLS],
-            prod2: [[0; 2]; COLS],
+            e: [RowRing::new(0), RowRing::new(0)],
+            v: [RowRing::new(0), RowRing::new(0)],
+            sums_small: [RowRing::new(0), RowRing::new(0), RowRing::new(0)],
+            sums_wide: [RowRing::new(0), RowRing::new(0)],
+            vert_d: [[0; COLS]; 4],
+            vert_e: [[0; COLS]; 2],
+            products: Products { small: [[0; COLS]; 3], wide: [[0; COLS]; 2] },
             out: [FlowPixel::ZERO; COLS],
-            window: Window {
-                x_first: 0,
-                n: 0,
-                y_first: 0,
-                t: 0,
-            },
+            window: Window { x_first: 0, n: 0, y_first: 0, t: 0 },
         }
     }
 
     /// Compute every tile of `plan` into `sink`. Fails only when the frames
     /// are not of the plan's size.
-    pub fn run<S: Sink>(
-        &mut self,
-        plan: &Plan<COLS>,
-        frames: &FramePair<'_>,
-        sink: &mut S,
-    ) -> Result<(), Error> {
+    pub fn run<S: Sink>(&mut self, plan: &Plan<COLS>, frames: &FramePair<'_>, sink: &mut S) -> Result<(), Error> {
         check_size(plan.config(), frames)?;
         for tile in plan.tiles() {
             self.tile(plan.config(), frames, tile, sink);
@@ -172,70 +164,42 @@ impl<const COLS: usize> Engine<COLS> {
         });
         for k in 0..tile.height + 2 * HALO {
             let y = tile.y as isize - HALO as isize + k as isize;
-            self.push(
-                config,
-                frames.prev().clamped_row(y),
-                frames.next().clamped_row(y),
-                sink,
-            );
+            self.push(config, frames.prev().clamped_row(y), frames.next().clamped_row(y), sink);
         }
     }
 
     pub(crate) fn begin(&mut self, window: Window) {
-        self.window = Window {
-            n: window.n.min(COLS),
-            t: 0,
-            ..window
-        };
+        self.window = Window { n: window.n.min(COLS), t: 0, ..window };
     }
 
     /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
     /// frame width) and run every stage it completes.
-    pub(crate) fn push<S: Sink>(
-        &mut self,
-        config: &Config,
-        prev: &[u8],
-        next: &[u8],
-        sink: &mut S,
-    ) {
+    pub(crate) fn push<S: Sink>(&mut self, config: &Config, prev: &[u8], next: &[u8], sink: &mut S) {
         let Window { x_first, n, t, .. } = self.window;
         self.window.t += 1;
-
-        // Input: the window's columns of both rows, clamped into the frame.
-        let last = prev.len().min(next.len()).saturating_sub(1) as isize;
-        let (p0, d) = (self.p0.row_mut(t), self.d.row_mut(t));
-        for (i, (p, dd)) in p0.iter_mut().zip(d.iter_mut()).take(n).enumerate() {
-            let x = (x_first + i as isize).clamp(0, last) as usize;
-            let (a, b) = (
-                prev.get(x).copied().unwrap_or(0),
-                next.get(x).copied().unwrap_or(0),
-            );
-            *p = a;
-            *dd = i16::from(b) - i16::from(a);
-        }
+        load_row(prev, next, x_first, n, self.p0.row_mut(t), self.d.row_mut(t));
         if t >= 4 {
-            let rows = [t - 4, t - 3, t - 2, t - 1, t].map(|k| self.d.row(k));
-            boundary_minus_domain(rows, &mut self.vert_d, self.e.row_mut(t - 2), n);
+            let [ex, ey] = &mut self.e;
+            boundary_minus_domain(self.d.rows(t - 4), &mut self.vert_d, (ex.row_mut(t - 2), ey.row_mut(t - 2)), n);
         }
         if t >= 8 {
-            let rows = [t - 6, t - 5, t - 4, t - 3, t - 2].map(|k| self.e.row(k));
-            smooth(rows, &mut self.vert_e, self.v.row_mut(t - 4), n);
+            let e = [self.e[0].rows(t - 6), self.e[1].rows(t - 6)];
+            let [vx, vy] = &mut self.v;
+            smooth(e, &mut self.vert_e, (vx.row_mut(t - 4), vy.row_mut(t - 4)), n);
         }
         if t >= 10 {
             let j = t - 5;
             let input = ResidualInputs {
-                v: [j - 1, j, j + 1].map(|k| self.v.row(k)),
-                p0: [j - 1, j, j + 1].map(|k| self.p0.row(k)),
+                vx: self.v[0].row(j),
+                vy: self.v[1].rows(j - 1),
+                p0: self.p0.rows(j - 1),
                 d: self.d.row(j),
                 kappa: config.kappa,
             };
-            let products = (&mut self.prod3, &mut self.prod2);
-            structure_row(
-                &input,
-                products,
-                (self.sum3.row_mut(j), self.sum2.row_mut(j)),
-                n,
-            );
+            let [sa, sb, sc] = &mut self.sums_small;
+            let [sp, sq] = &mut self.sums_wide;
+            let small = [sa.row_mut(j), sb.row_mut(j), sc.row_mut(j)];
+            structure_row(&input, &mut self.products, small, [sp.row_mut(j), sq.row_mut(j)], n);
         }
         if t >= 2 * HALO {
             self.emit(config, t - HALO, sink);
@@ -244,46 +208,93 @@ impl<const COLS: usize> Engine<COLS> {
 
     /// Solve and hand over output row `o` (window rows; `o ≥ 7`).
     fn emit<S: Sink>(&mut self, config: &Config, o: usize, sink: &mut S) {
-        let Window {
-            x_first,
-            n,
-            y_first,
-            ..
-        } = self.window;
-        let sum3 = [o - 2, o - 1, o, o + 1, o + 2].map(|k| self.sum3.row(k));
-        let sum2 = [o - 2, o - 1, o, o + 1, o + 2].map(|k| self.sum2.row(k));
-        let (v, luma) = (self.v.row(o), self.p0.row(o));
+        let Window { x_first, n, y_first, .. } = self.window;
+        // The vertical G of the five sums, into the product rows (free now).
+        let Products { small, wide } = &mut self.products;
+        for (ring, out) in self.sums_small.iter().zip(small.iter_mut()) {
+            vertical_binomial(ring.rows(o - 2), out, n, HALO);
+        }
+        for (ring, out) in self.sums_wide.iter().zip(wide.iter_mut()) {
+            vertical_binomial(ring.rows(o - 2), out, n, HALO);
+        }
+        let [a, b, c] = small;
+        let [p, q] = wide;
+        let (vx, vy, luma) = (self.v[0].row(o), self.v[1].row(o), self.p0.row(o));
         let width = n.saturating_sub(2 * HALO);
-        let cols = (HALO..HALO + width).zip(self.out.iter_mut());
+        let cols = (HALO..(HALO + width).min(COLS)).zip(self.out.iter_mut());
         for (i, out) in cols {
-            let v_d = divergence_free_q16(config, structure_sums(sum3, sum2, i));
-            let v_c = v[i].map(|c| curl_free_q16(config, c));
+            let sums = StructureSums { a: a[i], b: b[i], c: c[i], p: p[i], q: q[i] };
+            let v_d = divergence_free_q16(config, sums);
+            let v_c = [curl_free_q16(config, vx[i]), curl_free_q16(config, vy[i])];
             *out = FlowPixel {
-                v_c: v_c.map(I16F16::from_bits),
-                v_d: v_d.map(I16F16::from_bits),
+                v_c: [I16F16::from_bits(v_c[0]), I16F16::from_bits(v_c[1])],
+                v_d: [I16F16::from_bits(v_d[0]), I16F16::from_bits(v_d[1])],
                 m_c: U16F16::from_bits(magnitude_q16(v_c)),
                 m_d: U16F16::from_bits(magnitude_q16(v_d)),
                 luma: luma[i],
             };
         }
-        let (y, x) = (
-            (y_first + o as isize) as usize,
-            (x_first + HALO as isize) as usize,
-        );
+        let (y, x) = ((y_first + o as isize) as usize, (x_first + HALO as isize) as usize);
         sink.row(y, x, self.out.get(..width).unwrap_or(&[]));
     }
 }
 
-/// Bytes per window column: rings of `p0` (8 rows × 1 B), `d` (6 × 2),
-/// `E` (5 × 8), `V` (4 × 8), the sums (5 × 12 and 5 × 16), one row each of
-/// the vertical parts (8 + 8) and products (12 + 16), and the output row (28).
-const BYTES_PER_COLUMN: usize = 8 + 12 + 40 + 32 + 60 + 80 + 8 + 8 + 12 + 16 + 28;
+/// Window columns `[x_first, x_first + n)` of both rows, clamped into the
+/// frame (SPEC §2), as `p0` and `d = p1 − p0`.
+fn load_row<const COLS: usize>(
+    prev: &[u8],
+    next: &[u8],
+    x_first: isize,
+    n: usize,
+    p0: &mut [u8; COLS],
+    d: &mut [i16; COLS],
+) {
+    let width = prev.len().min(next.len());
+    let (Some(&first), Some(&last)) = (prev.first(), prev.get(width.wrapping_sub(1))) else {
+        return;
+    };
+    let (first_next, last_next) = (next.first().copied().unwrap_or(0), next.get(width - 1).copied().unwrap_or(0));
+    let n = n.min(COLS);
+    // Columns left of the frame, inside it, and right of it.
+    let left = (-x_first).clamp(0, n as isize) as usize;
+    let start = x_first.max(0) as usize;
+    let inside = width.saturating_sub(start).min(n - left);
+    let (p_left, p_rest) = p0.split_at_mut(left);
+    let (d_left, d_rest) = d.split_at_mut(left);
+    p_left.fill(first);
+    d_left.fill(i16::from(first_next) - i16::from(first));
+    let (src_p, src_n) = (prev.get(start..start + inside).unwrap_or(&[]), next.get(start..start + inside).unwrap_or(&[]));
+    for (((p, dd), &a), &b) in p_rest.iter_mut().zip(d_rest.iter_mut()).zip(src_p).zip(src_n) {
+        *p = a;
+        *dd = i16::from(b) - i16::from(a);
+    }
+    let right = left + inside..n;
+    if let (Some(p), Some(dd)) = (p0.get_mut(right.clone()), d.get_mut(right)) {
+        p.fill(last);
+        dd.fill(i16::from(last_next) - i16::from(last));
+    }
+}
 
 /// Working bytes of an `Engine<cols>`, for choosing `COLS` at run time
 /// (budgets, the `budget` command): equal to `Engine::<cols>::WORKING_BYTES`.
+/// Per window column: the sums' rings (2 × 5 × 8 and 3 × 5 × 4 bytes), the
+/// product rows (2 × 8 + 3 × 4), the rings of `E` (2 × 5 × 4) and `V`
+/// (2 × 4 × 4), the vertical parts (2 × 4 + 4 × 2), the output pixel (28),
+/// and the rings of `d` (6 × 2) and `p0` (8 × 1): 304 bytes.
 pub const fn working_bytes(cols: usize) -> usize {
-    let align = core::mem::align_of::<Engine<16>>();
-    (BYTES_PER_COLUMN * cols + core::mem::size_of::<Window>()).next_multiple_of(align)
+    use core::mem::{align_of, size_of};
+    // repr(C): each field at the next multiple of its alignment, in order.
+    const fn field(offset: usize, size: usize, align: usize) -> usize {
+        offset.next_multiple_of(align) + size
+    }
+    let mut end = size_of::<Window>();
+    end = field(end, 2 * 5 * 8 * cols, 8);
+    end = field(end, (2 * 8 * cols + 3 * 4 * cols).next_multiple_of(8), 8);
+    end = field(end, (3 * 5 + 2 * 5 + 2 * 4 + 2) * 4 * cols, 4);
+    end = field(end, size_of::<FlowPixel>() * cols, align_of::<FlowPixel>());
+    end = field(end, (6 + 4) * 2 * cols, 2);
+    end = field(end, 8 * cols, 1);
+    end.next_multiple_of(align_of::<Window>())
 }
 
 impl<const COLS: usize> Default for Engine<COLS> {
@@ -313,5 +324,10 @@ mod tests {
         assert_eq!(working_bytes(94), Engine::<94>::WORKING_BYTES);
         assert_eq!(working_bytes(142), Engine::<142>::WORKING_BYTES);
         assert_eq!(working_bytes(655), Engine::<655>::WORKING_BYTES);
+        for cols in 15..40 {
+            assert!(working_bytes(cols) >= 304 * cols);
+        }
+        assert_eq!(working_bytes(17), Engine::<17>::WORKING_BYTES);
+        assert_eq!(working_bytes(33), Engine::<33>::WORKING_BYTES);
     }
 }

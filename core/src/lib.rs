@@ -36,6 +36,7 @@ extern crate std;
 mod engine;
 mod error;
 mod frames;
+mod isqrt;
 mod params;
 mod plan;
 mod represent;

@@ -119,7 +119,7 @@ pub(crate) fn divergence_free_q16(config: &Config, s: StructureSums) -> [i32; 2]
 #[inline(always)]
 pub(crate) fn magnitude_q16(v: [i32; 2]) -> u32 {
     let [x, y] = v.map(|c| u64::from(c.unsigned_abs()));
-    (x * x + y * y).isqrt() as u32
+    crate::isqrt::isqrt(x * x + y * y)
 }
 
 #[cfg(test)]
