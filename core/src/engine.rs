@@ -10,12 +10,14 @@
 //! only on its inputs, not on where the window starts, every tiling yields
 //! the same bytes as one whole-frame window.
 
-use fixed::types::{I16F16, U16F16};
+use fixed::types::{I16F16, U32F32};
 
 use crate::ring::RowRing;
-use crate::solve::{curl_free_q16, divergence_free_q16, magnitude_q16};
 use crate::solve::StructureSums;
-use crate::stages::{Products, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial};
+use crate::solve::{curl_free_q32, divergence_free_q32, magnitude_q32, q16};
+use crate::stages::{
+    Products, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
+};
 use crate::{Config, Error, FramePair, Plan, Tile};
 
 /// Radius of input that one output pixel depends on (SPEC §6).
@@ -29,10 +31,11 @@ pub struct FlowPixel {
     pub v_c: [I16F16; 2],
     /// Divergence-free field `v_d` (x, y), pixels, Q16.16 (saturating).
     pub v_d: [I16F16; 2],
-    /// `|v_c|`, floor of the norm of the Q16.16 components.
-    pub m_c: U16F16,
+    /// `|v_c|`, Q32.32, from the components before their rounding to Q16.16
+    /// (so per-frame min–max keeps its precision on small motions).
+    pub m_c: U32F32,
     /// `|v_d|`, likewise.
-    pub m_d: U16F16,
+    pub m_d: U32F32,
     /// The pixel of `fⁿ` (the representation's B channel).
     pub luma: u8,
 }
@@ -41,8 +44,8 @@ impl FlowPixel {
     const ZERO: Self = Self {
         v_c: [I16F16::ZERO; 2],
         v_d: [I16F16::ZERO; 2],
-        m_c: U16F16::ZERO,
-        m_d: U16F16::ZERO,
+        m_c: U32F32::ZERO,
+        m_d: U32F32::ZERO,
         luma: 0,
     };
 }
@@ -82,7 +85,7 @@ pub(crate) struct Window {
 }
 
 /// All working memory of the computation, for tiles up to `COLS − 14`
-/// columns wide: `304 · COLS` bytes and a few more ([`working_bytes`]).
+/// columns wide: `316 · COLS` bytes and a few more ([`working_bytes`]).
 /// Each channel has its own plane of rows, so the row loops vectorise.
 /// `repr(C)`, widest fields first, so [`working_bytes`] can follow the layout.
 #[repr(C)]
@@ -123,15 +126,28 @@ impl<const COLS: usize> Engine<COLS> {
             sums_wide: [RowRing::new(0), RowRing::new(0)],
             vert_d: [[0; COLS]; 4],
             vert_e: [[0; COLS]; 2],
-            products: Products { small: [[0; COLS]; 3], wide: [[0; COLS]; 2] },
+            products: Products {
+                small: [[0; COLS]; 3],
+                wide: [[0; COLS]; 2],
+            },
             out: [FlowPixel::ZERO; COLS],
-            window: Window { x_first: 0, n: 0, y_first: 0, t: 0 },
+            window: Window {
+                x_first: 0,
+                n: 0,
+                y_first: 0,
+                t: 0,
+            },
         }
     }
 
     /// Compute every tile of `plan` into `sink`. Fails only when the frames
     /// are not of the plan's size.
-    pub fn run<S: Sink>(&mut self, plan: &Plan<COLS>, frames: &FramePair<'_>, sink: &mut S) -> Result<(), Error> {
+    pub fn run<S: Sink>(
+        &mut self,
+        plan: &Plan<COLS>,
+        frames: &FramePair<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error> {
         check_size(plan.config(), frames)?;
         for tile in plan.tiles() {
             self.tile(plan.config(), frames, tile, sink);
@@ -164,28 +180,60 @@ impl<const COLS: usize> Engine<COLS> {
         });
         for k in 0..tile.height + 2 * HALO {
             let y = tile.y as isize - HALO as isize + k as isize;
-            self.push(config, frames.prev().clamped_row(y), frames.next().clamped_row(y), sink);
+            self.push(
+                config,
+                frames.prev().clamped_row(y),
+                frames.next().clamped_row(y),
+                sink,
+            );
         }
     }
 
     pub(crate) fn begin(&mut self, window: Window) {
-        self.window = Window { n: window.n.min(COLS), t: 0, ..window };
+        self.window = Window {
+            n: window.n.min(COLS),
+            t: 0,
+            ..window
+        };
     }
 
     /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
     /// frame width) and run every stage it completes.
-    pub(crate) fn push<S: Sink>(&mut self, config: &Config, prev: &[u8], next: &[u8], sink: &mut S) {
+    pub(crate) fn push<S: Sink>(
+        &mut self,
+        config: &Config,
+        prev: &[u8],
+        next: &[u8],
+        sink: &mut S,
+    ) {
         let Window { x_first, n, t, .. } = self.window;
         self.window.t += 1;
-        load_row(prev, next, x_first, n, self.p0.row_mut(t), self.d.row_mut(t));
+        load_row(
+            prev,
+            next,
+            x_first,
+            n,
+            self.p0.row_mut(t),
+            self.d.row_mut(t),
+        );
         if t >= 4 {
             let [ex, ey] = &mut self.e;
-            boundary_minus_domain(self.d.rows(t - 4), &mut self.vert_d, (ex.row_mut(t - 2), ey.row_mut(t - 2)), n);
+            boundary_minus_domain(
+                self.d.rows(t - 4),
+                &mut self.vert_d,
+                (ex.row_mut(t - 2), ey.row_mut(t - 2)),
+                n,
+            );
         }
         if t >= 8 {
             let e = [self.e[0].rows(t - 6), self.e[1].rows(t - 6)];
             let [vx, vy] = &mut self.v;
-            smooth(e, &mut self.vert_e, (vx.row_mut(t - 4), vy.row_mut(t - 4)), n);
+            smooth(
+                e,
+                &mut self.vert_e,
+                (vx.row_mut(t - 4), vy.row_mut(t - 4)),
+                n,
+            );
         }
         if t >= 10 {
             let j = t - 5;
@@ -199,7 +247,13 @@ impl<const COLS: usize> Engine<COLS> {
             let [sa, sb, sc] = &mut self.sums_small;
             let [sp, sq] = &mut self.sums_wide;
             let small = [sa.row_mut(j), sb.row_mut(j), sc.row_mut(j)];
-            structure_row(&input, &mut self.products, small, [sp.row_mut(j), sq.row_mut(j)], n);
+            structure_row(
+                &input,
+                &mut self.products,
+                small,
+                [sp.row_mut(j), sq.row_mut(j)],
+                n,
+            );
         }
         if t >= 2 * HALO {
             self.emit(config, t - HALO, sink);
@@ -208,7 +262,12 @@ impl<const COLS: usize> Engine<COLS> {
 
     /// Solve and hand over output row `o` (window rows; `o ≥ 7`).
     fn emit<S: Sink>(&mut self, config: &Config, o: usize, sink: &mut S) {
-        let Window { x_first, n, y_first, .. } = self.window;
+        let Window {
+            x_first,
+            n,
+            y_first,
+            ..
+        } = self.window;
         // The vertical G of the five sums, into the product rows (free now).
         let Products { small, wide } = &mut self.products;
         for (ring, out) in self.sums_small.iter().zip(small.iter_mut()) {
@@ -223,18 +282,33 @@ impl<const COLS: usize> Engine<COLS> {
         let width = n.saturating_sub(2 * HALO);
         let cols = (HALO..(HALO + width).min(COLS)).zip(self.out.iter_mut());
         for (i, out) in cols {
-            let sums = StructureSums { a: a[i], b: b[i], c: c[i], p: p[i], q: q[i] };
-            let v_d = divergence_free_q16(config, sums);
-            let v_c = [curl_free_q16(config, vx[i]), curl_free_q16(config, vy[i])];
+            let sums = StructureSums {
+                a: a[i],
+                b: b[i],
+                c: c[i],
+                p: p[i],
+                q: q[i],
+            };
+            let v_d = divergence_free_q32(config, sums);
+            let v_c = [curl_free_q32(config, vx[i]), curl_free_q32(config, vy[i])];
             *out = FlowPixel {
-                v_c: [I16F16::from_bits(v_c[0]), I16F16::from_bits(v_c[1])],
-                v_d: [I16F16::from_bits(v_d[0]), I16F16::from_bits(v_d[1])],
-                m_c: U16F16::from_bits(magnitude_q16(v_c)),
-                m_d: U16F16::from_bits(magnitude_q16(v_d)),
+                v_c: [
+                    I16F16::from_bits(q16(v_c[0])),
+                    I16F16::from_bits(q16(v_c[1])),
+                ],
+                v_d: [
+                    I16F16::from_bits(q16(v_d[0])),
+                    I16F16::from_bits(q16(v_d[1])),
+                ],
+                m_c: U32F32::from_bits(magnitude_q32(v_c)),
+                m_d: U32F32::from_bits(magnitude_q32(v_d)),
                 luma: luma[i],
             };
         }
-        let (y, x) = ((y_first + o as isize) as usize, (x_first + HALO as isize) as usize);
+        let (y, x) = (
+            (y_first + o as isize) as usize,
+            (x_first + HALO as isize) as usize,
+        );
         sink.row(y, x, self.out.get(..width).unwrap_or(&[]));
     }
 }
@@ -253,7 +327,10 @@ fn load_row<const COLS: usize>(
     let (Some(&first), Some(&last)) = (prev.first(), prev.get(width.wrapping_sub(1))) else {
         return;
     };
-    let (first_next, last_next) = (next.first().copied().unwrap_or(0), next.get(width - 1).copied().unwrap_or(0));
+    let (first_next, last_next) = (
+        next.first().copied().unwrap_or(0),
+        next.get(width - 1).copied().unwrap_or(0),
+    );
     let n = n.min(COLS);
     // Columns left of the frame, inside it, and right of it.
     let left = (-x_first).clamp(0, n as isize) as usize;
@@ -263,8 +340,16 @@ fn load_row<const COLS: usize>(
     let (d_left, d_rest) = d.split_at_mut(left);
     p_left.fill(first);
     d_left.fill(i16::from(first_next) - i16::from(first));
-    let (src_p, src_n) = (prev.get(start..start + inside).unwrap_or(&[]), next.get(start..start + inside).unwrap_or(&[]));
-    for (((p, dd), &a), &b) in p_rest.iter_mut().zip(d_rest.iter_mut()).zip(src_p).zip(src_n) {
+    let (src_p, src_n) = (
+        prev.get(start..start + inside).unwrap_or(&[]),
+        next.get(start..start + inside).unwrap_or(&[]),
+    );
+    for (((p, dd), &a), &b) in p_rest
+        .iter_mut()
+        .zip(d_rest.iter_mut())
+        .zip(src_p)
+        .zip(src_n)
+    {
         *p = a;
         *dd = i16::from(b) - i16::from(a);
     }
@@ -279,8 +364,8 @@ fn load_row<const COLS: usize>(
 /// (budgets, the `budget` command): equal to `Engine::<cols>::WORKING_BYTES`.
 /// Per window column: the sums' rings (2 × 5 × 8 and 3 × 5 × 4 bytes), the
 /// product rows (2 × 8 + 3 × 4), the rings of `E` (2 × 5 × 4) and `V`
-/// (2 × 4 × 4), the vertical parts (2 × 4 + 4 × 2), the output pixel (28),
-/// and the rings of `d` (6 × 2) and `p0` (8 × 1): 304 bytes.
+/// (2 × 4 × 4), the vertical parts (2 × 4 + 4 × 2), the output pixel (40),
+/// and the rings of `d` (6 × 2) and `p0` (8 × 1): 316 bytes.
 pub const fn working_bytes(cols: usize) -> usize {
     use core::mem::{align_of, size_of};
     // repr(C): each field at the next multiple of its alignment, in order.
@@ -325,7 +410,7 @@ mod tests {
         assert_eq!(working_bytes(142), Engine::<142>::WORKING_BYTES);
         assert_eq!(working_bytes(655), Engine::<655>::WORKING_BYTES);
         for cols in 15..40 {
-            assert!(working_bytes(cols) >= 304 * cols);
+            assert!(working_bytes(cols) >= 316 * cols);
         }
         assert_eq!(working_bytes(17), Engine::<17>::WORKING_BYTES);
         assert_eq!(working_bytes(33), Engine::<33>::WORKING_BYTES);

@@ -50,10 +50,29 @@ mod tests {
 
     #[test]
     fn exact_on_edges_and_squares() {
-        for n in [0u64, 1, 2, 3, 4, 5, 8, 9, 15, 16, 17, u64::MAX, u64::MAX - 1, 1 << 62, (1 << 62) - 1] {
+        for n in [
+            0u64,
+            1,
+            2,
+            3,
+            4,
+            5,
+            8,
+            9,
+            15,
+            16,
+            17,
+            u64::MAX,
+            u64::MAX - 1,
+            1 << 62,
+            (1 << 62) - 1,
+        ] {
             assert_eq!(isqrt(n), n.isqrt() as u32, "{n}");
         }
-        for r in (0u64..1 << 32).step_by(65_521).chain([65_535, 65_536, u32::MAX as u64]) {
+        for r in (0u64..1 << 32)
+            .step_by(65_521)
+            .chain([65_535, 65_536, u32::MAX as u64])
+        {
             for n in [r * r, (r * r).saturating_sub(1), r * r + 1, r * r + 2 * r] {
                 assert_eq!(isqrt(n), n.isqrt() as u32, "{n}");
             }

@@ -6,7 +6,7 @@
 //!
 //! The computation is integer-only and deterministic: every target gives the
 //! same bytes. All working memory lives in one [`Engine`] whose size is a
-//! const generic (`COLS` window columns, about 304 bytes each), and frames
+//! const generic (`COLS` window columns, about 316 bytes each), and frames
 //! are cut into tiles of at most `COLS − 14` columns; every tiling gives the
 //! same bytes. Sizes and parameters are checked once ([`Config`], [`Plan`],
 //! [`FramePair`], the sinks); after that nothing fails or panics.

@@ -1,6 +1,6 @@
 //! Magnitudes to bytes (SPEC §4): `byte = min(255, ⌊x · k + ½⌋)`.
 
-use fixed::types::U16F16;
+use fixed::types::{U16F16, U32F32};
 
 /// How the two magnitudes become the representation's R and G bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,60 +19,67 @@ pub enum Scaling {
     },
 }
 
-/// One channel's affine map from a Q16.16 magnitude to a byte:
-/// `byte = min(255, ⌊x · gain / 2³² + ½⌋)` with `x` the Q16.16 bits of
-/// `m − offset` and `gain = k · 2¹⁶` (`x · gain / 2³²` is then `(m − offset) · k`).
+/// One channel's map from a Q32.32 magnitude to a byte:
+/// `byte = min(255, ⌊x · gain / 2^frac + ½⌋)` with `x = (m − offset) >> shift`
+/// in integer bits, so that `x · gain / 2^frac = (m − offset) · k`.
 ///
-/// Bound: `x < 2³²` and below `limit = ⌈2⁴⁰ / gain⌉`, so the product stays
-/// under `2⁴⁰ + gain < 2⁶⁴` (`gain ≤ 255 · 2³²`); at or above `limit` the
-/// byte is 255.
+/// Bound: at or above `limit = ⌈2^(frac+8) / gain⌉` the byte is 255; below
+/// it the product stays under `2^(frac+8) + gain ≤ 2⁶⁰ + 2⁶⁰`. A zero gain
+/// maps everything to 0.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ByteScale {
-    offset: u32,
+    offset: u64,
+    shift: u32,
     gain: u64,
+    frac: u32,
     limit: u64,
 }
 
 impl ByteScale {
-    fn new(offset: u32, gain: u64) -> Self {
+    fn new(offset: u64, shift: u32, gain: u64, frac: u32) -> Self {
         let limit = match gain {
             0 => u64::MAX,
-            g => (1u64 << 40).div_ceil(g),
+            g => (1u64 << (frac + 8)).div_ceil(g),
         };
+        // With a zero gain, x < limit always: (m − offset) >> shift < 2⁶⁴ − 1.
+        let shift = if gain == 0 { 1 } else { shift };
         Self {
             offset,
+            shift,
             gain,
+            frac,
             limit,
         }
     }
 
-    /// `Fixed(k)`: exact, since `m` and `k` are both Q16.16.
+    /// `Fixed(k)`: exact, `m` in Q32.32 times `k` in Q16.16 (`frac = 48`).
     pub fn fixed(k: U16F16) -> Self {
-        Self::new(0, u64::from(k.to_bits()))
+        Self::new(0, 0, u64::from(k.to_bits()), 48)
     }
 
-    /// Per-frame min–max from the frame's extremes (`min ≤ max`): `gain =
-    /// round(255 · 2³² / range)` with `range` in Q16.16 bits, so the byte
-    /// differs from the exact formula only within 2⁻²⁴ of a rounding tie.
-    pub fn min_max(min: U16F16, max: U16F16) -> Self {
+    /// Per-frame min–max from the frame's extremes (`min ≤ max`): the range
+    /// cut to 32 significant bits, `gain = round(255 · 2⁵² / range) ≥ 2²⁹`, so
+    /// the byte differs from the exact formula only within 2⁻²⁰ of a tie.
+    pub fn min_max(min: U32F32, max: U32F32) -> Self {
         let (lo, hi) = (min.to_bits(), max.to_bits());
-        let range = u64::from(hi.saturating_sub(lo));
-        let gain = match range {
+        let range = hi.saturating_sub(lo);
+        let shift = (u64::BITS - range.leading_zeros()).saturating_sub(32);
+        let gain = match range >> shift {
             0 => 0,
-            r => ((255u64 << 32) + r / 2) / r,
+            r => ((255u64 << 52) + r / 2) / r,
         };
-        Self::new(lo, gain)
+        Self::new(lo, shift, gain, 52)
     }
 
     /// The byte of magnitude `m`.
     #[inline(always)]
-    pub fn byte(&self, m: U16F16) -> u8 {
-        let x = u64::from(m.to_bits().saturating_sub(self.offset));
+    pub fn byte(&self, m: U32F32) -> u8 {
+        let x = m.to_bits().saturating_sub(self.offset) >> self.shift;
         if x >= self.limit {
             return 255;
         }
-        (((x * self.gain) >> 31).div_ceil(2)).min(255) as u8
+        ((((x * self.gain) >> (self.frac - 1)) + 1) >> 1).min(255) as u8
     }
 }
 
@@ -81,21 +88,21 @@ impl ByteScale {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Extremes {
     /// Smallest value seen.
-    pub min: U16F16,
+    pub min: U32F32,
     /// Largest value seen.
-    pub max: U16F16,
+    pub max: U32F32,
 }
 
 impl Extremes {
     /// Nothing seen yet (`min > max`).
     pub const EMPTY: Self = Self {
-        min: U16F16::MAX,
-        max: U16F16::ZERO,
+        min: U32F32::MAX,
+        max: U32F32::ZERO,
     };
 
     /// Take one more value into account.
     #[inline(always)]
-    pub fn add(&mut self, m: U16F16) {
+    pub fn add(&mut self, m: U32F32) {
         self.min = self.min.min(m);
         self.max = self.max.max(m);
     }
@@ -130,19 +137,20 @@ mod tests {
     fn fixed_gain_rounds_like_the_spec() {
         for k in [0.0, 0.5, 1.0, 8.0, 32.0, 1000.25, 65535.0] {
             let scale = ByteScale::fixed(U16F16::from_num(k));
-            for bits in [
-                0u32,
+            let bits = [
+                0u64,
                 1,
                 4095,
-                4096,
-                32768,
-                65535,
-                65536,
-                1 << 20,
-                16_711_680,
-                u32::MAX,
-            ] {
-                let m = U16F16::from_bits(bits);
+                1 << 31,
+                65535 << 16,
+                1 << 32,
+                1 << 40,
+                0xFF_0000_0000,
+                1 << 47,
+                u64::MAX,
+            ];
+            for bits in bits {
+                let m = U32F32::from_bits(bits);
                 assert_eq!(scale.byte(m), reference(m.to_num(), k), "k={k} m={m}");
             }
         }
@@ -150,19 +158,28 @@ mod tests {
 
     #[test]
     fn min_max_spans_0_to_255() {
-        let (lo, hi) = (U16F16::from_num(1.25), U16F16::from_num(19.5));
+        let (lo, hi) = (U32F32::from_num(1.25), U32F32::from_num(19.5));
         let scale = ByteScale::min_max(lo, hi);
         assert_eq!(scale.byte(lo), 0);
         assert_eq!(scale.byte(hi), 255);
         for mid in [2.0, 10.0, 10.376, 17.125] {
-            let byte = scale.byte(U16F16::from_num(mid));
+            let byte = scale.byte(U32F32::from_num(mid));
             assert_eq!(byte, reference(mid - 1.25, 255.0 / 18.25), "{mid}");
         }
         let flat = ByteScale::min_max(hi, hi);
         assert_eq!(flat.byte(hi), 0);
-        let tiny = ByteScale::min_max(U16F16::from_bits(7), U16F16::from_bits(8));
-        assert_eq!(tiny.byte(U16F16::from_bits(8)), 255);
-        assert_eq!(tiny.byte(U16F16::MAX), 255);
+        let tiny = ByteScale::min_max(U32F32::from_bits(7), U32F32::from_bits(8));
+        assert_eq!(tiny.byte(U32F32::from_bits(8)), 255);
+        assert_eq!(tiny.byte(U32F32::from_bits(7)), 0);
+        assert_eq!(tiny.byte(U32F32::MAX), 255);
+        // A range of 0.01 px keeps full byte precision.
+        let (lo, hi) = (U32F32::from_num(0.0003), U32F32::from_num(0.0103));
+        let small = ByteScale::min_max(lo, hi);
+        for i in 0..=1000 {
+            let m = U32F32::from_num(0.0003 + 0.01 * i as f64 / 1000.0);
+            let want = (m - lo).to_num::<f64>() * 255.0 / (hi - lo).to_num::<f64>();
+            assert!((small.byte(m) as f64 - want).abs() <= 0.5 + 1e-6, "{m}");
+        }
     }
 }
 

@@ -1,6 +1,6 @@
 //! Ready-made sinks: field planes, the RGB representation, and extremes.
 
-use fixed::types::{I16F16, U16F16};
+use fixed::types::{I16F16, U32F32};
 
 use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Sink};
 
@@ -40,9 +40,9 @@ pub struct FieldPlanes<'a> {
     /// `v_d` y.
     pub v_d_y: Option<&'a mut [I16F16]>,
     /// `|v_c|`.
-    pub m_c: Option<&'a mut [U16F16]>,
+    pub m_c: Option<&'a mut [U32F32]>,
     /// `|v_d|`.
-    pub m_d: Option<&'a mut [U16F16]>,
+    pub m_d: Option<&'a mut [U32F32]>,
 }
 
 /// A sink that writes the fields into caller-provided planes.

@@ -7,8 +7,8 @@
 
 use crate::Config;
 
-/// Largest field value, in Q16.16: fields saturate symmetrically at ±(2³¹ − 1).
-const FIELD_MAX: u64 = i32::MAX as u64;
+/// Fields saturate at ±(2³¹ − 1)·2¹⁶ in Q32.32, so their Q16.16 values fit `I16F16`.
+const FIELD_MAX_Q32: u64 = (i32::MAX as u64) << 16;
 
 /// `floor(mag / 2^shift + 1/2)` for any shift, without overflow.
 #[inline(always)]
@@ -20,24 +20,30 @@ fn round_shift(mag: u64, shift: u32) -> u64 {
     }
 }
 
-/// Reapply a sign to a magnitude already limited to [`FIELD_MAX`].
+/// Reapply a sign to a magnitude already limited to [`FIELD_MAX_Q32`].
 #[inline(always)]
-fn signed(negative: bool, mag: u64) -> i32 {
-    let mag = mag.min(FIELD_MAX) as i32;
+fn signed(negative: bool, mag: u64) -> i64 {
+    let mag = mag.min(FIELD_MAX_Q32) as i64;
     if negative { -mag } else { mag }
 }
 
-/// `v_c` in Q16.16 from `V` (units `s/768`, `|V| ≤ 1.02e7 < 2²⁴`):
-/// `round(V · c)`, `c = s · 2¹⁶ / 768 < 86`, half away from zero.
-/// `|V| · c_mant < 2²⁴ · 2³² = 2⁵⁶`; the result is below 2³¹ for every `s ≤ 1`.
+/// A field component from Q32.32 to Q16.16 (`I16F16` bits), to nearest.
 #[inline(always)]
-pub(crate) fn curl_free_q16(config: &Config, v: i32) -> i32 {
+pub(crate) fn q16(v: i64) -> i32 {
+    signed(v < 0, round_shift(v.unsigned_abs(), 16)) as i32
+}
+
+/// `v_c` in Q32.32 from `V` (units `s/768`, `|V| ≤ 1.02e7 < 2²⁴`):
+/// `round(V · c · 2¹⁶)`, `c = s · 2¹⁶ / 768 < 86`, half away from zero.
+/// `|V| · c_mant < 2²⁴ · 2³² = 2⁵⁶`, shifted by `c_exp − 16 ≥ 8`: below 2⁴⁸.
+#[inline(always)]
+pub(crate) fn curl_free_q32(config: &Config, v: i32) -> i64 {
     let mag = u64::from(v.unsigned_abs()) * u64::from(config.c_mant);
-    signed(v < 0, round_shift(mag, config.c_exp))
+    signed(v < 0, round_shift(mag, config.c_exp - 16))
 }
 
 /// The structure sums of one pixel (SPEC §3 step 8), as exact integers:
-/// `a = G256 ⋆ X²` … and `p = G256 ⋆ (X · Dn)` … (formats in `engine`).
+/// `a = G256 ⋆ X²` … and `p = G256 ⋆ (X · Dn)` … (formats in `stages`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct StructureSums {
     /// `0 ≤ a, c ≤ 256 · 1020² = 266 342 400 < 2²⁸`; `b² ≤ a·c`.
@@ -49,11 +55,11 @@ pub(crate) struct StructureSums {
     pub q: i64,
 }
 
-/// `v_d` in Q16.16: the solve of `[a+λ, b; b, c+λ] v = [p; q]` (SPEC step 9).
+/// `v_d` in Q32.32: the solve of `[a+λ, b; b, c+λ] v = [p; q]` (SPEC step 9).
 ///
 /// In eighths of the `a` unit (`a8 = 8a`, `Λ8` from [`Config`]) the SPEC's
-/// solution is `v = c · 8 · N / det` with `det = (a8+Λ8)(c8+Λ8) − b8²` and
-/// `N = (c8+Λ8)·p − b8·q` (x; y alike). Bounds:
+/// solution is `v = c · 8 · N / det` (Q16.16) with
+/// `det = (a8+Λ8)(c8+Λ8) − b8²` and `N = (c8+Λ8)·p − b8·q` (x; y alike). Bounds:
 /// - `a8 + Λ8 < 2 130 739 200 + 2³¹ < 2³²`, so `det < 2⁶⁴` in `u64`; `det ≥ Λ8² ≥ 1`
 ///   because `b² ≤ a·c` exactly (Cauchy–Schwarz on non-negative weights).
 /// - `p, q` are cut to `|p'|, |q'| < 2³⁰` by one shift `sp` shared by both,
@@ -63,7 +69,7 @@ pub(crate) struct StructureSums {
 /// - `|N|` normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · r < 2⁶³`; its top 31 bits
 ///   times `c_mant < 2³²` stay below 2⁶³. Relative error about 2⁻²⁸.
 #[inline(always)]
-pub(crate) fn divergence_free_q16(config: &Config, s: StructureSums) -> [i32; 2] {
+pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2] {
     let lambda = config.lambda8;
     let a8 = (s.a as u32) * 8 + lambda;
     let c8 = (s.c as u32) * 8 + lambda;
@@ -88,9 +94,9 @@ pub(crate) fn divergence_free_q16(config: &Config, s: StructureSums) -> [i32; 2]
         det << (32 - e)
     };
     let r = (u64::MAX >> 1) / d32.max(1);
-    // v = prod · 2^k with k = (bits − 31) + sp + 4 − e − c_exp (see above).
-    let base = sp as i32 + 4 - e as i32 - config.c_exp as i32;
-    let quotient = |n: i64| -> i32 {
+    // v = prod · 2^k in Q32.32, k = (bits − 31) + sp + 4 − e − c_exp + 16.
+    let base = sp as i32 + 20 - e as i32 - config.c_exp as i32;
+    let quotient = |n: i64| -> i64 {
         let mag = n.unsigned_abs();
         if mag == 0 {
             return 0;
@@ -105,7 +111,7 @@ pub(crate) fn divergence_free_q16(config: &Config, s: StructureSums) -> [i32; 2]
         let prod = m1 * u64::from(config.c_mant);
         let k = base + bits - 31;
         let mag = if k >= 0 {
-            FIELD_MAX
+            FIELD_MAX_Q32
         } else {
             round_shift(prod, k.unsigned_abs())
         };
@@ -114,12 +120,15 @@ pub(crate) fn divergence_free_q16(config: &Config, s: StructureSums) -> [i32; 2]
     [quotient(nx), quotient(ny)]
 }
 
-/// `|v|` in Q16.16 (`U16F16` bits), exact floor of the Euclidean norm of the
-/// Q16.16 components: `x² + y² < 2⁶³` fits `u64`, and its root `< 2³²`.
+/// `|v|` in Q32.32 (`U32F32` bits) from Q32.32 components (`|x|, |y| ≤ 2⁴⁷`):
+/// both cut by one shift to below 2³¹ so the squares' sum fits `u64`, the
+/// exact integer root, shifted back. Relative error below 2⁻³⁰.
 #[inline(always)]
-pub(crate) fn magnitude_q16(v: [i32; 2]) -> u32 {
-    let [x, y] = v.map(|c| u64::from(c.unsigned_abs()));
-    crate::isqrt::isqrt(x * x + y * y)
+pub(crate) fn magnitude_q32(v: [i64; 2]) -> u64 {
+    let [x, y] = [v[0].unsigned_abs(), v[1].unsigned_abs()];
+    let shift = (u64::BITS - (x | y).leading_zeros()).saturating_sub(31);
+    let (x, y) = (x >> shift, y >> shift);
+    u64::from(crate::isqrt::isqrt(x * x + y * y)) << shift
 }
 
 #[cfg(test)]
@@ -167,7 +176,7 @@ mod tests {
                                 p,
                                 q,
                             };
-                            let got = divergence_free_q16(&cfg, s);
+                            let got = divergence_free_q32(&cfg, s).map(q16);
                             let want = oracle(s);
                             let norm = 65536.0 * want[0].hypot(want[1]);
                             for (g, w) in got.iter().zip(want) {
@@ -218,7 +227,7 @@ mod tests {
                 s.p += w * x * dn;
                 s.q += w * y * dn;
             }
-            let got = divergence_free_q16(&cfg, s);
+            let got = divergence_free_q32(&cfg, s).map(q16);
             let want = oracle(s);
             let norm = 65536.0 * want[0].hypot(want[1]);
             for (g, w) in got.iter().zip(want) {
@@ -246,8 +255,9 @@ mod tests {
             q: -s.q,
             ..s
         };
-        let [x, y] = divergence_free_q16(&cfg, s);
-        assert_eq!(divergence_free_q16(&cfg, neg), [-x, -y]);
+        let [x, y] = divergence_free_q32(&cfg, s);
+        assert_eq!(divergence_free_q32(&cfg, neg), [-x, -y]);
+        assert!(x != 0 && y != 0);
     }
 
     #[test]
@@ -255,15 +265,29 @@ mod tests {
         let cfg = config();
         for v in [0, 1, -1, 195_840, -195_840, 10_180_000, -10_180_000, 12_345] {
             let want = (v as f64 * 65536.0 / 195_840.0).round();
-            assert_eq!(curl_free_q16(&cfg, v) as f64, want, "{v}");
+            assert_eq!(q16(curl_free_q32(&cfg, v)) as f64, want, "{v}");
         }
     }
 
     #[test]
-    fn magnitude_is_the_floor_of_the_norm() {
-        assert_eq!(magnitude_q16([3 << 16, -(4 << 16)]), 5 << 16);
-        assert_eq!(magnitude_q16([i32::MAX, i32::MAX]), 3_037_000_498);
-        assert_eq!(magnitude_q16([-i32::MAX, 0]), i32::MAX as u32);
-        assert_eq!(magnitude_q16([1, 1]), 1);
+    fn magnitude_is_the_norm_to_2e30() {
+        assert_eq!(magnitude_q32([3 << 32, -(4 << 32)]), 5 << 32);
+        assert_eq!(magnitude_q32([1, 1]), 1);
+        assert_eq!(magnitude_q32([0, 0]), 0);
+        let max = FIELD_MAX_Q32 as i64;
+        let mut s = 12345u64;
+        for case in 0..100_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let x = (s as i64 >> (case % 40 + 16)).clamp(-max, max);
+            let y = ((s >> 7) as i64 >> (case % 23 + 16)).clamp(-max, max);
+            let want = (x as f64).hypot(y as f64);
+            let got = magnitude_q32([x, y]) as f64;
+            assert!(
+                got <= want * (1.0 + 1e-12) && got >= want * (1.0 - 2f64.powi(-29)) - 1.0,
+                "{x} {y}"
+            );
+        }
     }
 }

@@ -44,8 +44,12 @@ fn span<const COLS: usize>(n: usize, r: usize) -> core::ops::Range<usize> {
 
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[inline(always)]
-pub(crate) fn vertical_binomial<T, const COLS: usize>(rows: [&[T; COLS]; 5], out: &mut [T; COLS], n: usize, r: usize)
-where
+pub(crate) fn vertical_binomial<T, const COLS: usize>(
+    rows: [&[T; COLS]; 5],
+    out: &mut [T; COLS],
+    n: usize,
+    r: usize,
+) where
     T: Copy + Add<Output = T> + Shl<u32, Output = T>,
 {
     let [a, b, c, d, e] = rows;
@@ -56,8 +60,12 @@ where
 
 /// The horizontal binomial of a row valid on `[r − 2, n − r + 2)`, on `[r, n − r)`.
 #[inline(always)]
-fn horizontal_binomial<T, const COLS: usize>(row: &[T; COLS], out: &mut [T; COLS], n: usize, r: usize)
-where
+fn horizontal_binomial<T, const COLS: usize>(
+    row: &[T; COLS],
+    out: &mut [T; COLS],
+    n: usize,
+    r: usize,
+) where
     T: Copy + Add<Output = T> + Shl<u32, Output = T>,
 {
     let cols = span::<COLS>(n, r.max(2));
@@ -144,7 +152,13 @@ pub(crate) fn structure_row<const COLS: usize>(
     sums_wide: [&mut [i64; COLS]; 2],
     n: usize,
 ) {
-    let ResidualInputs { vx, vy: [vy_up, vy, vy_down], p0: [p_up, p_mid, p_down], d, kappa } = *input;
+    let ResidualInputs {
+        vx,
+        vy: [vy_up, vy, vy_down],
+        p0: [p_up, p_mid, p_down],
+        d,
+        kappa,
+    } = *input;
     let [xx, xy, yy] = &mut products.small;
     let [xd, yd] = &mut products.wide;
     for i in span::<COLS>(n, 5) {

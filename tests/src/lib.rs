@@ -172,3 +172,76 @@ pub fn frame_pair(pattern: Pattern, w: usize, h: usize, seed: u64) -> (Vec<u8>, 
         }
     }
 }
+
+/// Where the conformance vectors live (copied from the SPEC's independent
+/// float64 implementation).
+pub fn vectors_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("vectors")
+}
+
+/// Names of the vector cases, sorted.
+pub fn vector_cases() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(vectors_dir())
+        .expect("tests/vectors exists")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_dir())
+        .filter_map(|e| e.file_name().into_string().ok())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Error statistics of one field (two components) against a reference.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FieldError {
+    /// Largest reference magnitude over the frame.
+    pub max_ref: f64,
+    /// Largest per-pixel error (max over both components).
+    pub max_err: f64,
+    /// Root mean square of the per-pixel error.
+    pub rms_err: f64,
+    /// Pixels whose error exceeds a given bound (set by `count_over`).
+    pub over: usize,
+    pub pixels: usize,
+}
+
+impl FieldError {
+    /// Compare `(x, y)` against `(rx, ry)`, counting pixels over `bound(max_ref)`.
+    pub fn measure(
+        x: &[f64],
+        y: &[f64],
+        rx: &[f64],
+        ry: &[f64],
+        bound: impl Fn(f64) -> f64,
+    ) -> Self {
+        let max_ref = rx
+            .iter()
+            .zip(ry)
+            .map(|(a, b)| a.hypot(*b))
+            .fold(0.0, f64::max);
+        let errs: Vec<f64> = (0..x.len())
+            .map(|i| (x[i] - rx[i]).abs().max((y[i] - ry[i]).abs()))
+            .collect();
+        let limit = bound(max_ref);
+        Self {
+            max_ref,
+            max_err: errs.iter().copied().fold(0.0, f64::max),
+            rms_err: (errs.iter().map(|e| e * e).sum::<f64>() / errs.len().max(1) as f64).sqrt(),
+            over: errs.iter().filter(|&&e| e > limit).count(),
+            pixels: errs.len(),
+        }
+    }
+}
+
+/// Byte comparison of two representations: largest difference and how many
+/// bytes differ.
+pub fn byte_diff(a: &[u8], b: &[u8]) -> (u8, usize) {
+    assert_eq!(a.len(), b.len(), "representations of different sizes");
+    let max = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0);
+    (max, a.iter().zip(b).filter(|(x, y)| x != y).count())
+}
