@@ -1,0 +1,90 @@
+//! The `reynoldsflow` command line: one module per subcommand, shared flag
+//! value parsers in [`values`]. Errors print as one line,
+//! `reynoldsflow: error: <what>: <problem>`; exit status 1 for a failed
+//! run, 2 for a malformed command line.
+
+use std::ffi::OsString;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+pub mod pair;
+pub mod values;
+
+const EXAMPLES: &str = "\
+Examples:
+  reynoldsflow pair f0.pgm f1.pgm --out out/
+      fixed-point core, per-frame min-max bytes: out/{vcx,vcy,vdx,vdy}.npy, out/rep.png
+  reynoldsflow pair a.png b.png --out ref/ --engine float --scale fixed:8,32
+      float64 reference, constant gains 8 (|v_d|) and 32 (|v_c|)";
+
+/// ReynoldsFlow: curl-free and divergence-free motion fields of frame
+/// pairs, and their RGB representation [|v_d|, |v_c|, frame n].
+#[derive(Debug, Parser)]
+#[command(name = "reynoldsflow", version, after_help = EXAMPLES)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Fields and representation of one frame pair.
+    #[command(after_help = EXAMPLES)]
+    Pair(pair::PairArgs),
+}
+
+/// Parse `args` (program name first), run, and report.
+pub fn run<I, T>(args: I) -> ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(&e),
+    };
+    let result = match &cli.command {
+        Command::Pair(args) => pair::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("reynoldsflow: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Help and version go out as clap renders them; a malformed command line
+/// becomes one line (clap's message without its usage block).
+fn usage_error(e: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            // Nothing useful to do if stdout is gone.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        // No subcommand: the help is the message (on stderr).
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = e.print();
+            return ExitCode::from(2);
+        }
+        _ => {}
+    }
+    let rendered = e.render().to_string();
+    let parts: Vec<&str> = rendered
+        .lines()
+        .map(str::trim)
+        .filter(|l| {
+            !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
+        })
+        .collect();
+    let message = parts.join(" ");
+    let message = message.strip_prefix("error: ").unwrap_or(&message);
+    eprintln!("reynoldsflow: error: {message} (see --help)");
+    ExitCode::from(2)
+}

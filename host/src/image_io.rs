@@ -1,0 +1,271 @@
+//! Image files: 8-bit PGM/PPM (binary or ASCII), PNG and JPEG in, as
+//! [`Gray`] (colour through BT.601, alpha ignored); RGB8 PNG out, atomically.
+//!
+//! Refused with a typed [`ImageProblem`]: samples wider than 8 bits, and
+//! PNM files whose maxval is not 255 (their samples would need a rescale
+//! the SPEC does not define). PNG files of 1, 2 or 4 bits and palette PNGs
+//! are expanded to 8 bits as the PNG standard prescribes.
+
+use std::fs;
+use std::io::Cursor;
+use std::path::Path;
+
+use image::codecs::png::PngEncoder;
+use image::codecs::pnm::PnmDecoder;
+use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
+
+use crate::{Gray, HostError, ImageProblem, atomic};
+
+/// An RGB8 image, row-major, `3 · width · height` bytes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Rgb8 {
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// `[R, G, B]` per pixel.
+    pub bytes: Vec<u8>,
+}
+
+/// The container, from the file's first bytes (never its name).
+fn sniff(bytes: &[u8]) -> Option<ImageFormat> {
+    match bytes {
+        [b'P', b'1'..=b'7', ..] => Some(ImageFormat::Pnm),
+        [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n', ..] => Some(ImageFormat::Png),
+        [0xff, 0xd8, 0xff, ..] => Some(ImageFormat::Jpeg),
+        _ => None,
+    }
+}
+
+fn decode_error(e: image::ImageError) -> ImageProblem {
+    ImageProblem::Decode(e.to_string())
+}
+
+/// Decode any supported container into an image of 8-bit samples or fail.
+fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
+    let format = sniff(bytes).ok_or(ImageProblem::UnknownFormat)?;
+    let image = if format == ImageFormat::Pnm {
+        let decoder = PnmDecoder::new(Cursor::new(bytes)).map_err(decode_error)?;
+        let maxval = decoder.header().maximal_sample();
+        if maxval != 255 {
+            return Err(ImageProblem::Maxval { maxval });
+        }
+        DynamicImage::from_decoder(decoder).map_err(decode_error)?
+    } else {
+        image::load_from_memory_with_format(bytes, format).map_err(decode_error)?
+    };
+    match image {
+        DynamicImage::ImageLuma8(_)
+        | DynamicImage::ImageLumaA8(_)
+        | DynamicImage::ImageRgb8(_)
+        | DynamicImage::ImageRgba8(_) => Ok(image),
+        DynamicImage::ImageLuma16(_)
+        | DynamicImage::ImageLumaA16(_)
+        | DynamicImage::ImageRgb16(_)
+        | DynamicImage::ImageRgba16(_) => Err(ImageProblem::NotEightBit { bits: 16 }),
+        DynamicImage::ImageRgb32F(_) | DynamicImage::ImageRgba32F(_) => {
+            Err(ImageProblem::NotEightBit { bits: 32 })
+        }
+        other => Err(ImageProblem::Decode(format!(
+            "unsupported pixel layout {:?}",
+            other.color()
+        ))),
+    }
+}
+
+/// Decode an image file's bytes into a gray frame (SPEC §1).
+pub fn decode_gray(bytes: &[u8]) -> Result<Gray, ImageProblem> {
+    let image = decode(bytes)?;
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    let pixels: Vec<u8> = match image {
+        DynamicImage::ImageLuma8(b) => b.into_raw(),
+        DynamicImage::ImageLumaA8(b) => b.into_raw().chunks_exact(2).map(|p| p[0]).collect(),
+        DynamicImage::ImageRgb8(b) => {
+            return gray_or_empty(Gray::from_rgb8(width, height, b.as_raw()));
+        }
+        DynamicImage::ImageRgba8(b) => b
+            .into_raw()
+            .chunks_exact(4)
+            .map(|p| crate::gray::luma_bt601(p[0], p[1], p[2]))
+            .collect(),
+        _ => unreachable!("decode() returns 8-bit layouts only"),
+    };
+    gray_or_empty(Gray::new(width, height, pixels))
+}
+
+fn gray_or_empty(gray: Result<Gray, HostError>) -> Result<Gray, ImageProblem> {
+    gray.map_err(|_| ImageProblem::Decode("image has no pixels".into()))
+}
+
+/// Read an 8-bit image file as a gray frame.
+pub fn read_gray(path: &Path) -> Result<Gray, HostError> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    decode_gray(&bytes).map_err(|problem| HostError::Image {
+        path: path.to_owned(),
+        problem,
+    })
+}
+
+/// Read an RGB8 image file (a representation), exactly as stored; any
+/// other pixel layout is refused.
+pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    let refuse = |problem| HostError::Image {
+        path: path.to_owned(),
+        problem,
+    };
+    match decode(&bytes).map_err(refuse)? {
+        DynamicImage::ImageRgb8(b) => Ok(Rgb8 {
+            width: b.width() as usize,
+            height: b.height() as usize,
+            bytes: b.into_raw(),
+        }),
+        other => Err(refuse(ImageProblem::Decode(format!(
+            "expected RGB8, found {:?}",
+            other.color()
+        )))),
+    }
+}
+
+/// The bytes of a PNG holding an RGB8 image.
+///
+/// # Panics
+/// If `rgb.len() != 3 · width · height`.
+pub fn encode_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, HostError> {
+    assert_eq!(
+        rgb.len(),
+        3 * width * height,
+        "rgb must hold 3 · width · height bytes"
+    );
+    let too_large =
+        || HostError::invalid("image", format!("{width}x{height} is too large for PNG"));
+    let (w, h) = (
+        u32::try_from(width).map_err(|_| too_large())?,
+        u32::try_from(height).map_err(|_| too_large())?,
+    );
+    let mut png = Vec::new();
+    PngEncoder::new(&mut png)
+        .write_image(rgb, w, h, ExtendedColorType::Rgb8)
+        .map_err(|e| HostError::invalid("image", format!("cannot encode PNG: {e}")))?;
+    Ok(png)
+}
+
+/// Write an RGB8 PNG atomically (see [`atomic`]).
+pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[u8]) -> Result<(), HostError> {
+    atomic::write_file(path, &encode_png(width, height, rgb)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn png(color: ExtendedColorType, w: u32, h: u32, data: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        PngEncoder::new(&mut out)
+            .write_image(data, w, h, color)
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn reads_pgm_binary_and_ascii() {
+        let p5 = [b"P5\n# a comment\n3 1\n255\n".as_slice(), &[0, 128, 255]].concat();
+        assert_eq!(
+            decode_gray(&p5).unwrap(),
+            Gray::new(3, 1, vec![0, 128, 255]).unwrap()
+        );
+        let p2 = b"P2 2 2 255\n 1 2\n 3 255\n";
+        assert_eq!(
+            decode_gray(p2).unwrap(),
+            Gray::new(2, 2, vec![1, 2, 3, 255]).unwrap()
+        );
+    }
+
+    #[test]
+    fn colour_goes_through_bt601_and_alpha_is_ignored() {
+        let rgb = png(ExtendedColorType::Rgb8, 2, 1, &[255, 0, 0, 0, 0, 255]);
+        assert_eq!(decode_gray(&rgb).unwrap().pixels, vec![76, 29]);
+        let rgba = png(
+            ExtendedColorType::Rgba8,
+            2,
+            1,
+            &[255, 0, 0, 0, 0, 0, 255, 7],
+        );
+        assert_eq!(decode_gray(&rgba).unwrap().pixels, vec![76, 29]);
+        let la = png(ExtendedColorType::La8, 2, 1, &[9, 0, 200, 255]);
+        assert_eq!(decode_gray(&la).unwrap().pixels, vec![9, 200]);
+        let ppm = [b"P6 1 1 255\n".as_slice(), &[0, 255, 0]].concat();
+        assert_eq!(decode_gray(&ppm).unwrap().pixels, vec![150]);
+    }
+
+    #[test]
+    fn refuses_wide_samples_other_maxvals_and_unknown_data() {
+        let l16 = png(ExtendedColorType::L16, 1, 1, &[1, 2]);
+        assert_eq!(
+            decode_gray(&l16),
+            Err(ImageProblem::NotEightBit { bits: 16 })
+        );
+        let p5_16 = [b"P5 1 1 65535\n".as_slice(), &[1, 2]].concat();
+        assert_eq!(
+            decode_gray(&p5_16),
+            Err(ImageProblem::Maxval { maxval: 65535 })
+        );
+        let p2_15 = b"P2 1 1 15\n7\n";
+        assert_eq!(decode_gray(p2_15), Err(ImageProblem::Maxval { maxval: 15 }));
+        assert_eq!(
+            decode_gray(b"hello world"),
+            Err(ImageProblem::UnknownFormat)
+        );
+        assert!(matches!(
+            decode_gray(b"P5 4 4 255\n\x01\x02"),
+            Err(ImageProblem::Decode(_))
+        ));
+        assert!(matches!(
+            decode_gray(&[0xff, 0xd8, 0xff, 0]),
+            Err(ImageProblem::Decode(_))
+        ));
+    }
+
+    #[test]
+    fn reads_gray_and_colour_jpeg() {
+        use image::codecs::jpeg::JpegEncoder;
+        let jpeg = |color, data: &[u8]| {
+            let mut out = Vec::new();
+            JpegEncoder::new_with_quality(&mut out, 100)
+                .write_image(data, 8, 8, color)
+                .unwrap();
+            out
+        };
+        let gray = decode_gray(&jpeg(ExtendedColorType::L8, &[200; 64])).unwrap();
+        assert_eq!(gray.size(), (8, 8));
+        assert!(
+            gray.pixels.iter().all(|&p| p.abs_diff(200) <= 1),
+            "{:?}",
+            gray.pixels
+        );
+        // Pure green, lossy: luma near 150.
+        let green: Vec<u8> = (0..64).flat_map(|_| [0, 255, 0]).collect();
+        let gray = decode_gray(&jpeg(ExtendedColorType::Rgb8, &green)).unwrap();
+        assert!(
+            gray.pixels.iter().all(|&p| p.abs_diff(150) <= 3),
+            "{:?}",
+            gray.pixels
+        );
+    }
+
+    #[test]
+    fn png_round_trip_is_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rep.png");
+        let rgb: Vec<u8> = (0..2 * 3 * 3).map(|i| (i * 14) as u8).collect();
+        write_png(&path, 3, 2, &rgb).unwrap();
+        assert_eq!(
+            read_rgb8(&path).unwrap(),
+            Rgb8 {
+                width: 3,
+                height: 2,
+                bytes: rgb
+            }
+        );
+    }
+}

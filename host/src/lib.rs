@@ -1,0 +1,29 @@
+//! Host side of ReynoldsFlow: the float64 reference of the SPEC
+//! ([`reference`](mod@reference)), the fixed-point core run over whole frames
+//! ([`fixed_engine`]), image and `.npy` I/O, and the `reynoldsflow`
+//! command line ([`cli`]).
+//!
+//! ```
+//! use reynoldsflow_host::{Gray, reference::{self, FloatParams, FloatScaling}};
+//! # fn main() -> Result<(), reynoldsflow_host::HostError> {
+//! let prev = Gray::new(8, 6, (0..48).map(|i| (i * 37 % 251) as u8).collect())?;
+//! let next = Gray::new(8, 6, (0..48).map(|i| (i * 41 % 251) as u8).collect())?;
+//! let flow = reference::compute(&prev, &next, &FloatParams::default())?;
+//! let rgb = reference::representation(&flow, &prev, FloatScaling::PerFrameMinMax);
+//! assert_eq!(rgb.len(), 3 * 8 * 6);
+//! # Ok(()) }
+//! ```
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod atomic;
+pub mod cli;
+mod error;
+pub mod fixed_engine;
+pub mod gray;
+pub mod image_io;
+pub mod npy;
+pub mod reference;
+
+pub use error::{HostError, ImageProblem};
+pub use gray::{Gray, luma_bt601};

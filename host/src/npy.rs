@@ -1,0 +1,145 @@
+//! 2-D float64 `.npy` files (NumPy's format, NEP 1), the exchange format of
+//! the fields: written as `<f8`, shape `(H, W)`, C order.
+
+use std::fs;
+use std::path::Path;
+
+use npyz::WriterBuilder;
+
+use crate::{HostError, atomic};
+
+/// A 2-D float64 array, row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Array2 {
+    /// Rows (`H`, the first axis).
+    pub height: usize,
+    /// Columns (`W`, the second axis).
+    pub width: usize,
+    /// `height · width` values, row `y` at `y · width`.
+    pub data: Vec<f64>,
+}
+
+/// The bytes of a `.npy` file holding `data` as a `(height, width)` `<f8`
+/// array in C order.
+///
+/// # Panics
+/// If `data.len() != height · width`.
+pub fn encode(height: usize, width: usize, data: &[f64]) -> Vec<u8> {
+    assert_eq!(
+        data.len(),
+        height * width,
+        "data must hold height · width values"
+    );
+    let mut bytes = Vec::with_capacity(128 + 8 * data.len());
+    // Writing into a Vec cannot fail, and the shape matches the data (asserted).
+    let mut writer = npyz::WriteOptions::<f64>::new()
+        .default_dtype()
+        .shape(&[height as u64, width as u64])
+        .writer(&mut bytes)
+        .begin_nd()
+        .expect("writing to memory");
+    writer
+        .extend(data.iter().copied())
+        .expect("writing to memory");
+    writer.finish().expect("writing to memory");
+    bytes
+}
+
+/// Write a `(height, width)` float64 `.npy` atomically (see [`atomic`]).
+pub fn write(path: &Path, height: usize, width: usize, data: &[f64]) -> Result<(), HostError> {
+    atomic::write_file(path, &encode(height, width, data))
+}
+
+/// Parse a 2-D float64 `.npy` (either byte order; Fortran order is
+/// transposed into row-major).
+pub fn decode(bytes: &[u8]) -> Result<Array2, String> {
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))?;
+    let [height, width] = *npy.shape() else {
+        return Err(format!(
+            "array has shape {:?}; a 2-D (H, W) array is needed",
+            npy.shape()
+        ));
+    };
+    let (height, width) = (height as usize, width as usize);
+    let order = npy.order();
+    let dtype = npy.dtype().descr();
+    let values = npy
+        .into_vec::<f64>()
+        .map_err(|e| format!("dtype {dtype} is not float64: {e}"))?;
+    let data = match order {
+        npyz::Order::C => values,
+        npyz::Order::Fortran => (0..height)
+            .flat_map(|y| (0..width).map(move |x| (x, y)))
+            .map(|(x, y)| values[x * height + y])
+            .collect(),
+    };
+    Ok(Array2 {
+        height,
+        width,
+        data,
+    })
+}
+
+/// Read a 2-D float64 `.npy` file.
+pub fn read(path: &Path) -> Result<Array2, HostError> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    decode(&bytes).map_err(|problem| HostError::Npy {
+        path: path.to_owned(),
+        problem,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_exactly_with_a_numpy_header() {
+        let data: Vec<f64> = (0..6).map(|i| f64::from(i) * 0.1 - 1e-300).collect();
+        let bytes = encode(2, 3, &data);
+        // NEP 1: magic, version 1.0, header padded so the data starts 64-aligned.
+        assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+        let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+        assert_eq!((10 + header_len) % 64, 0);
+        let header = std::str::from_utf8(&bytes[10..10 + header_len]).unwrap();
+        assert!(header.contains("'descr': '<f8'"), "{header}");
+        assert!(header.contains("'fortran_order': False"), "{header}");
+        // npyz writes the tuple as `(2, 3, )`, which Python (and NumPy) reads as (2, 3).
+        assert!(header.contains("'shape': (2, 3"), "{header}");
+        assert_eq!(bytes.len(), 10 + header_len + 48);
+        let back = decode(&bytes).unwrap();
+        assert_eq!(
+            back,
+            Array2 {
+                height: 2,
+                width: 3,
+                data
+            }
+        );
+    }
+
+    #[test]
+    fn refuses_other_shapes_and_types() {
+        let mut bytes = Vec::new();
+        let mut w = npyz::WriteOptions::<i32>::new()
+            .default_dtype()
+            .shape(&[2, 2])
+            .writer(&mut bytes)
+            .begin_nd()
+            .unwrap();
+        w.extend([1, 2, 3, 4]).unwrap();
+        w.finish().unwrap();
+        assert!(decode(&bytes).unwrap_err().contains("not float64"));
+        let mut bytes = Vec::new();
+        let mut w = npyz::WriteOptions::<f64>::new()
+            .default_dtype()
+            .shape(&[4])
+            .writer(&mut bytes)
+            .begin_nd()
+            .unwrap();
+        w.extend([1.0, 2.0, 3.0, 4.0]).unwrap();
+        w.finish().unwrap();
+        assert!(decode(&bytes).unwrap_err().contains("2-D"));
+        assert!(decode(b"garbage").unwrap_err().contains("not a .npy"));
+    }
+}
