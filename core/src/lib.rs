@@ -52,7 +52,7 @@ pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
-pub use plan::{Plan, Tile};
+pub use plan::{Plan, Tile, first_stage_pixels};
 pub use represent::{byte_scales, represent};
 pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
 pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb};

@@ -2,15 +2,16 @@
 //! planes: the fields (Q16.16) and magnitudes (Q32.32) as exact f64 copies
 //! of the core's values, and the RGB8 representation.
 
-use fixed::types::{I16F16, U32F32};
+use rayon::prelude::*;
 use reynoldsflow_core::{
-    Config, Engine, FieldPlanes, FieldSink, FramePair, Params, Plan, Scaling, represent,
+    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, Tile,
+    represent, rgb,
 };
 
 use crate::{Gray, HostError};
 
 /// Window columns of the host's engine: tiles up to
-/// [`MAX_TILE_WIDTH`] = 128 columns, about 43 KiB of working memory.
+/// [`MAX_TILE_WIDTH`] = 128 columns, about 45 KiB of working memory.
 /// Wider frames are cut into strips; every tiling gives the same bytes.
 pub const ENGINE_COLS: usize = 142;
 
@@ -44,22 +45,29 @@ pub struct FixedOutput {
     pub rep: Vec<u8>,
 }
 
-/// Run the core on `(prev, next)` with `params`, in full-height strips as
-/// wide as the engine allows, or in `tile = (width, height)` tiles when
-/// given. Fails when the frames differ in size, or the core refuses the
-/// size, the parameters or the tile (e.g. wider than [`MAX_TILE_WIDTH`]).
-pub fn compute_fixed(
-    prev: &Gray,
-    next: &Gray,
+/// A whole frame of the core's output pixels, row-major: a [`Sink`] that
+/// each tile writes its rows into.
+struct PixelPlane {
+    width: usize,
+    pixels: Vec<FlowPixel>,
+}
+
+impl Sink for PixelPlane {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let start = y * self.width + x;
+        self.pixels[start..start + pixels.len()].copy_from_slice(pixels);
+    }
+}
+
+/// Checked geometry of one run: configuration, tiling and the frames.
+fn prepare<'a>(
+    prev: &'a Gray,
+    next: &'a Gray,
     params: Params,
     tile: Option<(usize, usize)>,
-    scaling: Scaling,
-) -> Result<FixedOutput, HostError> {
+) -> Result<(Plan<ENGINE_COLS>, FramePair<'a>), HostError> {
     if prev.size() != next.size() {
-        return Err(HostError::SizeMismatch {
-            prev: prev.size(),
-            next: next.size(),
-        });
+        return Err(HostError::SizeMismatch { prev: prev.size(), next: next.size() });
     }
     let (width, height) = prev.size();
     let config = Config::new(width, height, params)?;
@@ -68,50 +76,114 @@ pub fn compute_fixed(
         Some((tw, th)) => Plan::new(config, tw, th)?,
     };
     let frames = FramePair::packed(&config, &prev.pixels, &next.pixels)?;
-    // Boxed: the engine is too large to keep on a test thread's stack for long.
-    let mut engine = Box::new(HostEngine::new());
+    Ok((plan, frames))
+}
 
-    let n = width * height;
-    let (mut vcx, mut vcy, mut vdx, mut vdy) = (
-        vec![I16F16::ZERO; n],
-        vec![I16F16::ZERO; n],
-        vec![I16F16::ZERO; n],
-        vec![I16F16::ZERO; n],
-    );
-    let (mut m_d, mut m_c) = (vec![U32F32::ZERO; n], vec![U32F32::ZERO; n]);
-    let mut rep = vec![0u8; 3 * n];
-    let fields = FieldSink::new(
-        &config,
-        FieldPlanes {
-            v_c_x: Some(&mut vcx),
-            v_c_y: Some(&mut vcy),
-            v_d_x: Some(&mut vdx),
-            v_d_y: Some(&mut vdy),
-            m_c: Some(&mut m_c),
-            m_d: Some(&mut m_d),
-        },
-    )?;
-    represent(&mut engine, &plan, &frames, scaling, &mut rep, fields)?;
-
-    // Q16.16 → f64 is exact: 32 significant bits fit the 53-bit mantissa.
-    let signed = |v: Vec<I16F16>| {
-        v.into_iter()
-            .map(|x| f64::from(x.to_bits()) / 65536.0)
-            .collect()
-    };
-    // Magnitudes are Q32.32 below 2⁴⁸: exact in f64 as well.
-    let unsigned = |v: Vec<U32F32>| v.into_iter().map(|x| x.to_num::<f64>()).collect();
-    Ok(FixedOutput {
+/// The planes of a [`FixedOutput`] from the core's pixels; every conversion
+/// is exact (Q16.16 and Q32.32 below 2⁴⁸ fit f64's mantissa).
+fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> FixedOutput {
+    let plane = |f: &dyn Fn(&FlowPixel) -> f64| pixels.iter().map(f).collect();
+    FixedOutput {
         width,
         height,
-        vcx: signed(vcx),
-        vcy: signed(vcy),
-        vdx: signed(vdx),
-        vdy: signed(vdy),
-        m_d: unsigned(m_d),
-        m_c: unsigned(m_c),
+        vcx: plane(&|p| p.v_c[0].to_num()),
+        vcy: plane(&|p| p.v_c[1].to_num()),
+        vdx: plane(&|p| p.v_d[0].to_num()),
+        vdy: plane(&|p| p.v_d[1].to_num()),
+        m_d: plane(&|p| p.m_d.to_num()),
+        m_c: plane(&|p| p.m_c.to_num()),
         rep,
-    })
+    }
+}
+
+/// Run the core on `(prev, next)` with `params`, in full-height strips as
+/// wide as the engine allows, or in `tile = (width, height)` tiles when
+/// given, the way firmware does: one engine, the core's own
+/// [`represent`] (two passes for per-frame min–max). Fails when the frames
+/// differ in size, or the core refuses the size, the parameters or the
+/// tile (e.g. wider than [`MAX_TILE_WIDTH`]).
+pub fn compute_fixed(
+    prev: &Gray,
+    next: &Gray,
+    params: Params,
+    tile: Option<(usize, usize)>,
+    scaling: Scaling,
+) -> Result<FixedOutput, HostError> {
+    let (plan, frames) = prepare(prev, next, params, tile)?;
+    let (width, height) = prev.size();
+    // Boxed: the engine is too large to keep on a test thread's stack for long.
+    let mut engine = Box::new(HostEngine::new());
+    let mut pixels = PixelPlane { width, pixels: vec![FlowPixel::default(); width * height] };
+    let mut rep = vec![0u8; 3 * width * height];
+    represent(&mut engine, &plan, &frames, scaling, &mut rep, &mut pixels)?;
+    Ok(output(width, height, &pixels.pixels, rep))
+}
+
+/// The same output as [`compute_fixed`], bit for bit, with the tiles spread
+/// over `threads` cores: one engine per worker, each tile into its own
+/// buffer, assembled in the frame; the bytes are made once every pixel is
+/// in, so per-frame min–max costs one engine pass, not two.
+pub fn compute_fixed_parallel(
+    prev: &Gray,
+    next: &Gray,
+    params: Params,
+    tile: Option<(usize, usize)>,
+    scaling: Scaling,
+    threads: usize,
+) -> Result<FixedOutput, HostError> {
+    let (plan, frames) = prepare(prev, next, params, tile)?;
+    let (width, height) = prev.size();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .map_err(|e| HostError::invalid("--threads", e.to_string()))?;
+    let tiles: Vec<(Tile, Vec<FlowPixel>)> = pool.install(|| {
+        (0..plan.tile_count())
+            .into_par_iter()
+            .filter_map(|index| plan.tile(index).map(|tile| (index, tile)))
+            .map_init(
+                || Box::new(HostEngine::new()),
+                |engine, (index, tile)| {
+                    let mut buffer = PixelPlane {
+                        width: tile.width,
+                        pixels: vec![FlowPixel::default(); tile.width * tile.height],
+                    };
+                    // Rows arrive in frame coordinates: shift them into the tile's buffer.
+                    let mut shifted = Shifted { inner: &mut buffer, x: tile.x, y: tile.y };
+                    engine.run_tile(&plan, &frames, index, &mut shifted).map(|()| (tile, buffer.pixels))
+                },
+            )
+            .collect::<Result<_, _>>()
+    })?;
+    let mut frame = PixelPlane { width, pixels: vec![FlowPixel::default(); width * height] };
+    for (tile, pixels) in &tiles {
+        for (row, chunk) in pixels.chunks(tile.width).enumerate() {
+            frame.row(tile.y + row, tile.x, chunk);
+        }
+    }
+    let (scale_d, scale_c) = match scaling {
+        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
+        Scaling::PerFrameMinMax => {
+            let mut extremes = ExtremesSink::default();
+            extremes.row(0, 0, &frame.pixels);
+            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
+        }
+    };
+    let rep = frame.pixels.iter().flat_map(|p| rgb(p, &scale_d, &scale_c)).collect();
+    Ok(output(width, height, &frame.pixels, rep))
+}
+
+/// A sink that moves rows from frame coordinates into a tile's own buffer.
+struct Shifted<'a> {
+    inner: &'a mut PixelPlane,
+    x: usize,
+    y: usize,
+}
+
+impl Sink for Shifted<'_> {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        self.inner.row(y - self.y, x - self.x, pixels);
+    }
 }
 
 #[cfg(test)]
@@ -123,6 +195,18 @@ mod tests {
             .map(|i| ((i * 7 + seed).wrapping_mul(2_654_435_761) >> 13) as u8)
             .collect();
         Gray::new(width, height, pixels).unwrap()
+    }
+
+    #[test]
+    fn parallel_tiles_equal_the_serial_engine() {
+        let (a, b) = (frame(300, 45, 0), frame(300, 45, 1));
+        for scaling in [Scaling::PerFrameMinMax, Scaling::Fixed { k_d: 8u8.into(), k_c: 32u8.into() }] {
+            let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
+            for (tile, threads) in [(None, 2), (Some((17, 9)), 2), (Some((128, 45)), 1), (Some((1, 45)), 3)] {
+                let parallel = compute_fixed_parallel(&a, &b, Params::DEFAULT, tile, scaling, threads).unwrap();
+                assert!(parallel == serial, "tile {tile:?}, {threads} threads, {scaling:?}");
+            }
+        }
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod budget;
 pub mod pair;
 pub mod values;
 
@@ -34,6 +35,8 @@ pub enum Command {
     /// Fields and representation of one frame pair.
     #[command(after_help = EXAMPLES)]
     Pair(pair::PairArgs),
+    /// Working memory and halo overhead of a tiling (for firmware budgets).
+    Budget(budget::BudgetArgs),
 }
 
 /// Parse `args` (program name first), run, and report.
@@ -48,6 +51,7 @@ where
     };
     let result = match &cli.command {
         Command::Pair(args) => pair::run(args),
+        Command::Budget(args) => budget::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,55 @@
+//! Throughput of the fixed engine per tile shape (README's tiling table):
+//! the full representation (`Fixed` gains, one pass) of a textured moving
+//! pair at 160×120, 320×240 and 640×480, one engine, one thread.
+//!
+//! `cargo bench -p reynoldsflow-host --bench tiling`
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use reynoldsflow_core::fixed::types::U16F16;
+use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
+
+/// A textured frame moved by (t, t/2) px: every stage has work to do.
+fn frame(w: usize, h: usize, t: f64) -> Vec<u8> {
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f64 - t, (i / w) as f64 - t / 2.0);
+            (128.0 + 60.0 * (0.21 * x).sin() * (0.17 * y).cos() + 40.0 * (0.05 * (x + y)).sin()) as u8
+        })
+        .collect()
+}
+
+/// One tile shape: an engine of `COLS` columns computing `tile` tiles.
+fn bench_shape<const COLS: usize>(c: &mut Criterion, w: usize, h: usize, tile: (usize, usize)) {
+    let (prev, next) = (frame(w, h, 0.0), frame(w, h, 1.0));
+    let config = Config::new(w, h, Params::DEFAULT).unwrap();
+    let plan = Plan::<COLS>::new(config, tile.0, tile.1).unwrap();
+    let frames = FramePair::packed(&config, &prev, &next).unwrap();
+    let mut engine = Box::new(Engine::<COLS>::new());
+    let mut rgb = vec![0u8; 3 * w * h];
+    let k = U16F16::from_num(8);
+    let mut group = c.benchmark_group(format!("tiling/{w}x{h}"));
+    group.throughput(Throughput::Elements((w * h) as u64));
+    let name = format!("{}x{} ({} B)", tile.0.min(w), tile.1.min(h), Engine::<COLS>::WORKING_BYTES);
+    group.bench_function(BenchmarkId::from_parameter(name), |b| {
+        b.iter(|| {
+            let scaling = Scaling::Fixed { k_d: k, k_c: k };
+            represent(&mut engine, &plan, &frames, scaling, black_box(&mut rgb), ()).unwrap();
+        })
+    });
+    group.finish();
+}
+
+fn tiling(c: &mut Criterion) {
+    for (w, h) in [(160, 120), (320, 240), (640, 480)] {
+        bench_shape::<46>(c, w, h, (32, 32));
+        bench_shape::<78>(c, w, h, (64, h));
+        bench_shape::<94>(c, w, h, (80, h));
+        bench_shape::<142>(c, w, h, (128, h));
+        bench_shape::<654>(c, w, h, (w, h));
+    }
+}
+
+criterion_group!(benches, tiling);
+criterion_main!(benches);
