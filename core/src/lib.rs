@@ -39,6 +39,7 @@ mod frames;
 mod isqrt;
 mod params;
 mod plan;
+mod reciprocal;
 mod represent;
 mod ring;
 mod scale;

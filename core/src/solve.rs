@@ -65,7 +65,7 @@ pub(crate) struct StructureSums {
 /// - `p, q` are cut to `|p'|, |q'| < 2³⁰` by one shift `sp` shared by both,
 ///   so `|N| < 2³²·2³⁰ + 2³¹·2³⁰ < 2⁶³`.
 /// - `1/det ≈ r · 2^−(31+e)`: `det`'s top 32 bits `d32 ∈ [2³¹, 2³²)` and
-///   `r = ⌊(2⁶³−1)/d32⌋ ∈ [2³¹, 2³²)`, one division per pixel for both axes.
+///   `r = ⌊(2⁶³−1)/d32⌋ ∈ [2³¹, 2³²)`, one reciprocal per pixel for both axes.
 /// - `|N|` normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · r < 2⁶³`; its top 31 bits
 ///   times `c_mant < 2³²` stay below 2⁶³. Relative error about 2⁻²⁸.
 #[inline(always)]
@@ -93,7 +93,7 @@ pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2]
     } else {
         det << (32 - e)
     };
-    let r = (u64::MAX >> 1) / d32.max(1);
+    let r = crate::reciprocal::reciprocal(d32 as u32);
     // v = prod · 2^k in Q32.32, k = (bits − 31) + sp + 4 − e − c_exp + 16.
     let base = sp as i32 + 20 - e as i32 - config.c_exp as i32;
     let quotient = |n: i64| -> i64 {
