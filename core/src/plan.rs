@@ -120,7 +120,12 @@ impl<const COLS: usize> Plan<COLS> {
 /// frame cut into tiles of at most `tile_width × tile_height`: every tile
 /// reads its 7-px halo, so columns and rows each gain 14 per tile:
 /// `(W + 14·⌈W/tw⌉) · (H + 14·⌈H/th⌉)` against `W · H`.
-pub const fn first_stage_pixels(width: usize, height: usize, tile_width: usize, tile_height: usize) -> (u64, u64) {
+pub const fn first_stage_pixels(
+    width: usize,
+    height: usize,
+    tile_width: usize,
+    tile_height: usize,
+) -> (u64, u64) {
     let across = width.div_ceil(if tile_width == 0 { 1 } else { tile_width });
     let down = height.div_ceil(if tile_height == 0 { 1 } else { tile_height });
     let computed = (width + 2 * HALO * across) as u64 * (height + 2 * HALO * down) as u64;
@@ -134,12 +139,24 @@ mod tests {
 
     #[test]
     fn closed_form_overhead_counts_every_tile() {
-        for (w, h, tw, th) in [(640, 480, 80, 480), (37, 11, 5, 3), (1, 1, 1, 1), (100, 7, 100, 7)] {
-            let plan = Plan::<214>::new(Config::new(w, h, Params::DEFAULT).unwrap(), tw, th).unwrap();
-            let by_tile: u64 = plan.tiles().map(|t| ((t.width + 14) * (t.height + 14)) as u64).sum();
+        for (w, h, tw, th) in [
+            (640, 480, 80, 480),
+            (37, 11, 5, 3),
+            (1, 1, 1, 1),
+            (100, 7, 100, 7),
+        ] {
+            let plan =
+                Plan::<214>::new(Config::new(w, h, Params::DEFAULT).unwrap(), tw, th).unwrap();
+            let by_tile: u64 = plan
+                .tiles()
+                .map(|t| ((t.width + 14) * (t.height + 14)) as u64)
+                .sum();
             assert_eq!(plan.first_stage_pixels(), (by_tile, (w * h) as u64));
         }
         // The budget: 80-px strips of a 640×480 frame, overhead 1.209.
-        assert_eq!(first_stage_pixels(640, 480, 80, 480), (8 * 94 * 494, 640 * 480));
+        assert_eq!(
+            first_stage_pixels(640, 480, 80, 480),
+            (8 * 94 * 494, 640 * 480)
+        );
     }
 }

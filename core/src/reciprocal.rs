@@ -45,7 +45,11 @@ mod tests {
     #[test]
     fn exact_at_the_edges_and_on_a_dense_grid() {
         let limit = u64::MAX >> 1;
-        for d in (1u64 << 31..1 << 32).step_by(4093).chain([1 << 31, (1 << 31) + 1, u32::MAX as u64]) {
+        for d in
+            (1u64 << 31..1 << 32)
+                .step_by(4093)
+                .chain([1 << 31, (1 << 31) + 1, u32::MAX as u64])
+        {
             assert_eq!(reciprocal(d as u32), limit / d, "{d}");
         }
         let mut s = 0x1234_5678u64;

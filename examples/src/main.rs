@@ -6,7 +6,9 @@
 //! `cargo run -p reynoldsflow-examples`
 
 use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{ByteScale, Config, Engine, Error, FlowPixel, Params, RowStream, Sink, rgb};
+use reynoldsflow_core::{
+    ByteScale, Config, Engine, Error, FlowPixel, Params, RowStream, Sink, rgb,
+};
 
 const W: usize = 96;
 const H: usize = 48;
@@ -18,7 +20,11 @@ fn frame(n: usize) -> Vec<u8> {
         .map(|i| {
             let (x, y) = (i % W, i / W);
             let inside = (20 + 2 * n..30 + 2 * n).contains(&x) && (19..29).contains(&y);
-            if inside { 230 } else { ((x * 7 + y * 13) % 31 * 3 + 40) as u8 }
+            if inside {
+                230
+            } else {
+                ((x * 7 + y * 13) % 31 * 3 + 40) as u8
+            }
         })
         .collect()
 }
@@ -43,16 +49,28 @@ fn main() -> Result<(), Error> {
     // Two strips of at most 64 columns: one engine each, every row to both.
     let mut engines = [Engine::<78>::new(), Engine::<78>::new()];
     let [left, right] = &mut engines;
-    let mut streams = [RowStream::new(left, config, 0, 64)?, RowStream::new(right, config, 64, W - 64)?];
-    let mut map = MotionMap { red: vec![0; W * H], scale: ByteScale::fixed(U16F16::from_num(8)) };
+    let mut streams = [
+        RowStream::new(left, config, 0, 64)?,
+        RowStream::new(right, config, 64, W - 64)?,
+    ];
+    let mut map = MotionMap {
+        red: vec![0; W * H],
+        scale: ByteScale::fixed(U16F16::from_num(8)),
+    };
     for y in 0..H {
         for stream in &mut streams {
             stream.push(&prev[y * W..][..W], &next[y * W..][..W], &mut map)?;
         }
     }
-    println!("engine working memory: {} bytes per strip", Engine::<78>::WORKING_BYTES);
+    println!(
+        "engine working memory: {} bytes per strip",
+        Engine::<78>::WORKING_BYTES
+    );
     for row in map.red.chunks(W).step_by(2) {
-        let line: String = row.iter().map(|&r| [' ', '.', ':', '*', '#'][(r as usize * 5 / 256).min(4)]).collect();
+        let line: String = row
+            .iter()
+            .map(|&r| [' ', '.', ':', '*', '#'][(r as usize * 5 / 256).min(4)])
+            .collect();
         println!("|{line}|");
     }
     Ok(())

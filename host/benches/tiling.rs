@@ -15,7 +15,8 @@ fn frame(w: usize, h: usize, t: f64) -> Vec<u8> {
     (0..w * h)
         .map(|i| {
             let (x, y) = ((i % w) as f64 - t, (i / w) as f64 - t / 2.0);
-            (128.0 + 60.0 * (0.21 * x).sin() * (0.17 * y).cos() + 40.0 * (0.05 * (x + y)).sin()) as u8
+            (128.0 + 60.0 * (0.21 * x).sin() * (0.17 * y).cos() + 40.0 * (0.05 * (x + y)).sin())
+                as u8
         })
         .collect()
 }
@@ -31,11 +32,24 @@ fn bench_shape<const COLS: usize>(c: &mut Criterion, w: usize, h: usize, tile: (
     let k = U16F16::from_num(8);
     let mut group = c.benchmark_group(format!("tiling/{w}x{h}"));
     group.throughput(Throughput::Elements((w * h) as u64));
-    let name = format!("{}x{} ({} B)", tile.0.min(w), tile.1.min(h), Engine::<COLS>::WORKING_BYTES);
+    let name = format!(
+        "{}x{} ({} B)",
+        tile.0.min(w),
+        tile.1.min(h),
+        Engine::<COLS>::WORKING_BYTES
+    );
     group.bench_function(BenchmarkId::from_parameter(name), |b| {
         b.iter(|| {
             let scaling = Scaling::Fixed { k_d: k, k_c: k };
-            represent(&mut engine, &plan, &frames, scaling, black_box(&mut rgb), ()).unwrap();
+            represent(
+                &mut engine,
+                &plan,
+                &frames,
+                scaling,
+                black_box(&mut rgb),
+                (),
+            )
+            .unwrap();
         })
     });
     group.finish();

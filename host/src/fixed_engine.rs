@@ -4,8 +4,8 @@
 
 use rayon::prelude::*;
 use reynoldsflow_core::{
-    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, Tile,
-    represent, rgb,
+    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink,
+    Tile, represent, rgb,
 };
 
 use crate::{Gray, HostError};
@@ -67,7 +67,10 @@ fn prepare<'a>(
     tile: Option<(usize, usize)>,
 ) -> Result<(Plan<ENGINE_COLS>, FramePair<'a>), HostError> {
     if prev.size() != next.size() {
-        return Err(HostError::SizeMismatch { prev: prev.size(), next: next.size() });
+        return Err(HostError::SizeMismatch {
+            prev: prev.size(),
+            next: next.size(),
+        });
     }
     let (width, height) = prev.size();
     let config = Config::new(width, height, params)?;
@@ -113,7 +116,10 @@ pub fn compute_fixed(
     let (width, height) = prev.size();
     // Boxed: the engine is too large to keep on a test thread's stack for long.
     let mut engine = Box::new(HostEngine::new());
-    let mut pixels = PixelPlane { width, pixels: vec![FlowPixel::default(); width * height] };
+    let mut pixels = PixelPlane {
+        width,
+        pixels: vec![FlowPixel::default(); width * height],
+    };
     let mut rep = vec![0u8; 3 * width * height];
     represent(&mut engine, &plan, &frames, scaling, &mut rep, &mut pixels)?;
     Ok(output(width, height, &pixels.pixels, rep))
@@ -149,13 +155,22 @@ pub fn compute_fixed_parallel(
                         pixels: vec![FlowPixel::default(); tile.width * tile.height],
                     };
                     // Rows arrive in frame coordinates: shift them into the tile's buffer.
-                    let mut shifted = Shifted { inner: &mut buffer, x: tile.x, y: tile.y };
-                    engine.run_tile(&plan, &frames, index, &mut shifted).map(|()| (tile, buffer.pixels))
+                    let mut shifted = Shifted {
+                        inner: &mut buffer,
+                        x: tile.x,
+                        y: tile.y,
+                    };
+                    engine
+                        .run_tile(&plan, &frames, index, &mut shifted)
+                        .map(|()| (tile, buffer.pixels))
                 },
             )
             .collect::<Result<_, _>>()
     })?;
-    let mut frame = PixelPlane { width, pixels: vec![FlowPixel::default(); width * height] };
+    let mut frame = PixelPlane {
+        width,
+        pixels: vec![FlowPixel::default(); width * height],
+    };
     for (tile, pixels) in &tiles {
         for (row, chunk) in pixels.chunks(tile.width).enumerate() {
             frame.row(tile.y + row, tile.x, chunk);
@@ -169,7 +184,11 @@ pub fn compute_fixed_parallel(
             (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
         }
     };
-    let rep = frame.pixels.iter().flat_map(|p| rgb(p, &scale_d, &scale_c)).collect();
+    let rep = frame
+        .pixels
+        .iter()
+        .flat_map(|p| rgb(p, &scale_d, &scale_c))
+        .collect();
     Ok(output(width, height, &frame.pixels, rep))
 }
 
@@ -200,11 +219,27 @@ mod tests {
     #[test]
     fn parallel_tiles_equal_the_serial_engine() {
         let (a, b) = (frame(300, 45, 0), frame(300, 45, 1));
-        for scaling in [Scaling::PerFrameMinMax, Scaling::Fixed { k_d: 8u8.into(), k_c: 32u8.into() }] {
+        for scaling in [
+            Scaling::PerFrameMinMax,
+            Scaling::Fixed {
+                k_d: 8u8.into(),
+                k_c: 32u8.into(),
+            },
+        ] {
             let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
-            for (tile, threads) in [(None, 2), (Some((17, 9)), 2), (Some((128, 45)), 1), (Some((1, 45)), 3)] {
-                let parallel = compute_fixed_parallel(&a, &b, Params::DEFAULT, tile, scaling, threads).unwrap();
-                assert!(parallel == serial, "tile {tile:?}, {threads} threads, {scaling:?}");
+            for (tile, threads) in [
+                (None, 2),
+                (Some((17, 9)), 2),
+                (Some((128, 45)), 1),
+                (Some((1, 45)), 3),
+            ] {
+                let parallel =
+                    compute_fixed_parallel(&a, &b, Params::DEFAULT, tile, scaling, threads)
+                        .unwrap();
+                assert!(
+                    parallel == serial,
+                    "tile {tile:?}, {threads} threads, {scaling:?}"
+                );
             }
         }
     }

@@ -6,15 +6,29 @@ use std::process::Command;
 use reynoldsflow_core::Engine;
 
 fn budget(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_reynoldsflow")).arg("budget").args(args).output().unwrap();
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    let out = Command::new(env!("CARGO_BIN_EXE_reynoldsflow"))
+        .arg("budget")
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }
 
 #[test]
 fn budget_of_80_px_strips_fits_32_kib_at_1_21_overhead() {
     let (ok, stdout, _) = budget(&["--width", "640", "--height", "480", "--tile", "80x480"]);
     assert!(ok);
-    assert_eq!(stdout, format!("working_bytes={} overhead=1.2093\n", Engine::<94>::WORKING_BYTES));
+    assert_eq!(
+        stdout,
+        format!(
+            "working_bytes={} overhead=1.2093\n",
+            Engine::<94>::WORKING_BYTES
+        )
+    );
     assert!(Engine::<94>::WORKING_BYTES <= 32 * 1024);
 }
 
@@ -23,7 +37,13 @@ fn tiles_larger_than_the_frame_are_the_frame() {
     let (ok, stdout, _) = budget(&["--width", "20", "--height", "10", "--tile", "500x500"]);
     assert!(ok);
     // One 20×10 tile read with its halo: 34 × 24 pixels for 200.
-    assert_eq!(stdout, format!("working_bytes={} overhead=4.0800\n", Engine::<34>::WORKING_BYTES));
+    assert_eq!(
+        stdout,
+        format!(
+            "working_bytes={} overhead=4.0800\n",
+            Engine::<34>::WORKING_BYTES
+        )
+    );
 }
 
 #[test]
@@ -35,6 +55,9 @@ fn bad_geometry_is_refused() {
     ] {
         let (ok, stdout, stderr) = budget(&args);
         assert!(!ok && stdout.is_empty(), "{args:?}");
-        assert!(stderr.starts_with("reynoldsflow: error:"), "{args:?}: {stderr}");
+        assert!(
+            stderr.starts_with("reynoldsflow: error:"),
+            "{args:?}: {stderr}"
+        );
     }
 }

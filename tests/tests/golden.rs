@@ -19,7 +19,9 @@ fn golden_dir() -> PathBuf {
 
 /// FNV-1a, 64 bits: a stable fingerprint for the summary.
 fn fnv(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    })
 }
 
 /// The fields' raw bits: four i32 planes (Q16.16 `v_c` x, y, `v_d` x, y),
@@ -28,10 +30,18 @@ fn field_bytes(out: &FixedOutput) -> Vec<u8> {
     let mut bytes = Vec::new();
     for plane in [&out.vcx, &out.vcy, &out.vdx, &out.vdy] {
         // Exact: the planes hold Q16.16 values converted to f64.
-        bytes.extend(plane.iter().flat_map(|v| ((v * 65536.0) as i32).to_le_bytes()));
+        bytes.extend(
+            plane
+                .iter()
+                .flat_map(|v| ((v * 65536.0) as i32).to_le_bytes()),
+        );
     }
     for plane in [&out.m_c, &out.m_d] {
-        bytes.extend(plane.iter().flat_map(|v| ((v * 4_294_967_296.0) as u64).to_le_bytes()));
+        bytes.extend(
+            plane
+                .iter()
+                .flat_map(|v| ((v * 4_294_967_296.0) as u64).to_le_bytes()),
+        );
     }
     bytes
 }
@@ -39,14 +49,19 @@ fn field_bytes(out: &FixedOutput) -> Vec<u8> {
 #[test]
 fn fixed_core_output_equals_the_golden_bytes() {
     let bless = std::env::var_os("REYNOLDSFLOW_BLESS").is_some();
-    let fixed = Scaling::Fixed { k_d: U16F16::from_num(8), k_c: U16F16::from_num(32) };
-    let mut summary = String::from("# case output bytes fnv1a64 (regenerate: see tests/golden.rs)\n");
+    let fixed = Scaling::Fixed {
+        k_d: U16F16::from_num(8),
+        k_c: U16F16::from_num(32),
+    };
+    let mut summary =
+        String::from("# case output bytes fnv1a64 (regenerate: see tests/golden.rs)\n");
     let mut changed = Vec::new();
     for case in vector_cases() {
         let dir = vectors_dir().join(&case);
         let f0 = image_io::read_gray(&dir.join("f0.pgm")).unwrap();
         let f1 = image_io::read_gray(&dir.join("f1.pgm")).unwrap();
-        let minmax = compute_fixed(&f0, &f1, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
+        let minmax =
+            compute_fixed(&f0, &f1, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
         let fixed = compute_fixed(&f0, &f1, Params::DEFAULT, None, fixed).unwrap();
         // PNGs are compared by their pixels (encoders may change), the fields by their bytes.
         let outputs = [
@@ -57,7 +72,13 @@ fn fixed_core_output_equals_the_golden_bytes() {
         for (name, bytes) in outputs {
             let path = golden_dir().join(&case).join(name);
             let is_png = name.ends_with(".png");
-            writeln!(summary, "{case} {name} {} {:016x}", bytes.len(), fnv(&bytes)).unwrap();
+            writeln!(
+                summary,
+                "{case} {name} {} {:016x}",
+                bytes.len(),
+                fnv(&bytes)
+            )
+            .unwrap();
             if bless {
                 std::fs::create_dir_all(path.parent().unwrap()).unwrap();
                 match is_png {
@@ -67,10 +88,13 @@ fn fixed_core_output_equals_the_golden_bytes() {
                 continue;
             }
             let golden = match is_png {
-                true => image_io::read_rgb8(&path).map(|img| img.bytes).map_err(|e| e.to_string()),
+                true => image_io::read_rgb8(&path)
+                    .map(|img| img.bytes)
+                    .map_err(|e| e.to_string()),
                 false => std::fs::read(&path).map_err(|e| e.to_string()),
             };
-            let golden = golden.unwrap_or_else(|e| panic!("{}: {e} (bless to create it)", path.display()));
+            let golden =
+                golden.unwrap_or_else(|e| panic!("{}: {e} (bless to create it)", path.display()));
             if golden != bytes {
                 changed.push(format!("{case}/{name}"));
             }
@@ -80,6 +104,13 @@ fn fixed_core_output_equals_the_golden_bytes() {
     if bless {
         std::fs::write(&summary_path, &summary).unwrap();
     }
-    assert!(changed.is_empty(), "fixed-point output changed: {changed:?}");
-    assert_eq!(std::fs::read_to_string(&summary_path).unwrap(), summary, "SUMMARY.txt is stale");
+    assert!(
+        changed.is_empty(),
+        "fixed-point output changed: {changed:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&summary_path).unwrap(),
+        summary,
+        "SUMMARY.txt is stale"
+    );
 }

@@ -27,11 +27,17 @@ pub struct BudgetArgs {
 pub fn run(args: &BudgetArgs) -> Result<(), HostError> {
     let (w, h) = (args.width, args.height);
     if !(1..=MAX_SIDE).contains(&w) || !(1..=MAX_SIDE).contains(&h) {
-        return Err(HostError::invalid("--width/--height", format!("frame sides must be 1..={MAX_SIDE}")));
+        return Err(HostError::invalid(
+            "--width/--height",
+            format!("frame sides must be 1..={MAX_SIDE}"),
+        ));
     }
     let (tw, th) = (args.tile.width.min(w), args.tile.height.min(h));
     let (computed, output) = first_stage_pixels(w, h, tw, th);
     let overhead = computed as f64 / output as f64;
-    println!("working_bytes={} overhead={overhead:.4}", working_bytes(tw + 2 * HALO));
+    println!(
+        "working_bytes={} overhead={overhead:.4}",
+        working_bytes(tw + 2 * HALO)
+    );
     Ok(())
 }
