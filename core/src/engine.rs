@@ -333,7 +333,7 @@ fn load_row<const COLS: usize>(
     );
     let n = n.min(COLS);
     // Columns left of the frame, inside it, and right of it.
-    let left = (-x_first).clamp(0, n as isize) as usize;
+    let left = (-x_first).min(n as isize).max(0) as usize;
     let start = x_first.max(0) as usize;
     let inside = width.saturating_sub(start).min(n - left);
     let (p_left, p_rest) = p0.split_at_mut(left);

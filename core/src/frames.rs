@@ -62,7 +62,8 @@ impl<'a> Frame<'a> {
     /// Row `y` clamped into the frame (SPEC §2: reads outside replicate the
     /// nearest pixel). Always `width` long.
     pub fn clamped_row(&self, y: isize) -> &'a [u8] {
-        let y = y.clamp(0, self.height as isize - 1) as usize;
+        // max/min, not clamp: clamp asserts min ≤ max, a panic path.
+        let y = y.min(self.height as isize - 1).max(0) as usize;
         let start = y * self.stride;
         // In range by construction (`new` checked `(h−1)·stride + w ≤ len`).
         self.pixels.get(start..start + self.width).unwrap_or(&[])

@@ -1,5 +1,7 @@
 //! How a frame is cut into tiles for an engine of a given capacity.
 
+use core::num::NonZeroUsize;
+
 use crate::{Config, Error, HALO};
 
 /// One output tile: columns `[x, x + width)`, rows `[y, y + height)`.
@@ -23,8 +25,12 @@ pub struct Tile {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Plan<const COLS: usize> {
     config: Config,
-    tile_width: usize,
-    tile_height: usize,
+    // Non-zero by construction, so tile arithmetic has no division-by-zero
+    // path for the compiler to keep.
+    tile_width: NonZeroUsize,
+    tile_height: NonZeroUsize,
+    across: NonZeroUsize,
+    down: NonZeroUsize,
 }
 
 impl<const COLS: usize> Plan<COLS> {
@@ -32,19 +38,16 @@ impl<const COLS: usize> Plan<COLS> {
     /// frame means the whole frame). The width must fit the engine:
     /// `tile_width ≤ COLS − 14`, unless the frame itself is narrower.
     pub fn new(config: Config, tile_width: usize, tile_height: usize) -> Result<Self, Error> {
-        if tile_width == 0 || tile_height == 0 {
-            return Err(Error::TileOutOfFrame);
-        }
         let max = COLS.saturating_sub(2 * HALO);
-        let tile_width = tile_width.min(config.width());
-        if tile_width > max {
+        let (w, h) = (config.width(), config.height());
+        let tile_width = NonZeroUsize::new(tile_width.min(w)).ok_or(Error::TileOutOfFrame)?;
+        let tile_height = NonZeroUsize::new(tile_height.min(h)).ok_or(Error::TileOutOfFrame)?;
+        if tile_width.get() > max {
             return Err(Error::TileTooWide { max });
         }
-        Ok(Self {
-            config,
-            tile_width,
-            tile_height: tile_height.min(config.height()),
-        })
+        let across = NonZeroUsize::new(w.div_ceil(tile_width.get())).ok_or(Error::EmptyFrame)?;
+        let down = NonZeroUsize::new(h.div_ceil(tile_height.get())).ok_or(Error::EmptyFrame)?;
+        Ok(Self { config, tile_width, tile_height, across, down })
     }
 
     /// The widest strips this engine allows, each the full frame height.
@@ -59,22 +62,22 @@ impl<const COLS: usize> Plan<COLS> {
 
     /// Tile width (at most the frame width).
     pub const fn tile_width(&self) -> usize {
-        self.tile_width
+        self.tile_width.get()
     }
 
     /// Tile height (at most the frame height).
     pub const fn tile_height(&self) -> usize {
-        self.tile_height
+        self.tile_height.get()
     }
 
     /// Tiles per row of tiles.
     pub const fn tiles_across(&self) -> usize {
-        self.config.width().div_ceil(self.tile_width)
+        self.across.get()
     }
 
     /// Rows of tiles.
     pub const fn tiles_down(&self) -> usize {
-        self.config.height().div_ceil(self.tile_height)
+        self.down.get()
     }
 
     /// Number of tiles.
@@ -87,13 +90,14 @@ impl<const COLS: usize> Plan<COLS> {
         if index >= self.tile_count() {
             return None;
         }
-        let (tx, ty) = (index % self.tiles_across(), index / self.tiles_across());
-        let (x, y) = (tx * self.tile_width, ty * self.tile_height);
+        let (tx, ty) = (index % self.across, index / self.across);
+        let (tw, th) = (self.tile_width.get(), self.tile_height.get());
+        let (x, y) = (tx * tw, ty * th);
         Some(Tile {
             x,
             y,
-            width: self.tile_width.min(self.config.width() - x),
-            height: self.tile_height.min(self.config.height() - y),
+            width: tw.min(self.config.width().saturating_sub(x)),
+            height: th.min(self.config.height().saturating_sub(y)),
         })
     }
 
@@ -105,14 +109,8 @@ impl<const COLS: usize> Plan<COLS> {
     /// Pixels the first stage computes (each tile with its 7-px halo on
     /// every side) and output pixels: their ratio is the tiling's overhead.
     pub fn first_stage_pixels(&self) -> (u64, u64) {
-        let computed = self
-            .tiles()
-            .map(|t| ((t.width + 2 * HALO) * (t.height + 2 * HALO)) as u64)
-            .sum();
-        (
-            computed,
-            (self.config.width() * self.config.height()) as u64,
-        )
+        let (w, h) = (self.config.width(), self.config.height());
+        first_stage_pixels(w, h, self.tile_width.get(), self.tile_height.get())
     }
 }
 

@@ -55,14 +55,19 @@ fn bench_shape<const COLS: usize>(c: &mut Criterion, w: usize, h: usize, tile: (
     group.finish();
 }
 
+/// Tile shapes: 32×32 squares, 64-, 80- and 128-px strips, and the full
+/// width (an engine exactly as wide as the frame).
 fn tiling(c: &mut Criterion) {
-    for (w, h) in [(160, 120), (320, 240), (640, 480)] {
+    fn shapes<const FULL: usize>(c: &mut Criterion, w: usize, h: usize) {
         bench_shape::<46>(c, w, h, (32, 32));
         bench_shape::<78>(c, w, h, (64, h));
         bench_shape::<94>(c, w, h, (80, h));
         bench_shape::<142>(c, w, h, (128, h));
-        bench_shape::<654>(c, w, h, (w, h));
+        bench_shape::<FULL>(c, w, h, (w, h));
     }
+    shapes::<174>(c, 160, 120);
+    shapes::<334>(c, 320, 240);
+    shapes::<654>(c, 640, 480);
 }
 
 criterion_group!(benches, tiling);
