@@ -16,6 +16,12 @@ const SEED: [u32; 192] = {
     table
 };
 
+/// `a · b` widened: one 32×32→64 multiply on every 32-bit target.
+#[inline(always)]
+pub(crate) fn mul(a: u32, b: u32) -> u64 {
+    u64::from(a) * u64::from(b)
+}
+
 /// `⌊√n⌋`, exact for every `n < 2⁶⁴`.
 #[inline]
 pub(crate) fn isqrt(n: u64) -> u32 {
@@ -25,23 +31,24 @@ pub(crate) fn isqrt(n: u64) -> u32 {
     // m = n·4^j ∈ [2⁶², 2⁶⁴); a = m's top 32 bits, read as x = a/2³² ∈ [¼, 1).
     let shift = n.leading_zeros() & !1;
     let a = ((n << shift) >> 32) as u32;
-    let a64 = u64::from(a);
-    // r ≈ 2³⁰/√x in Q30 ∈ (2³⁰, 2³¹]; r² ≤ 2⁶², so a·(r²/2³⁰) < 2⁶⁴ and
-    // r·(3·2³⁰ − t) < 2³¹·2³² fit u64. Each step squares the relative error.
-    let mut r = u64::from(SEED[((a >> 24) as usize).saturating_sub(64) % 192]);
+    // r ≈ 2³⁰/√x in Q30 ∈ (2³⁰, 2³¹]. One Newton step r·(3 − x·r²)/2, all in
+    // 32×32→64 products: r²/2³¹ ≤ 2³¹ (Q29), a·that/2³² ≈ x·r² ≤ 2³¹ (Q29),
+    // r·(3·2²⁹ − t)/2³⁰ < 1.5·2³¹ < 2³². Each step squares the relative error.
+    let mut r = SEED[((a >> 24) as usize).saturating_sub(64) % 192];
     for _ in 0..2 {
-        let t = (a64 * ((r * r) >> 30)) >> 32;
-        r = (r * ((3 << 30) - t.min(3 << 30))) >> 31;
+        let r2 = (mul(r, r) >> 31) as u32;
+        let t = ((mul(a, r2) >> 32) as u32).min(3 << 29);
+        r = (mul(r, (3 << 29) - t) >> 30) as u32;
     }
-    // √m ≈ a·r/2³⁰ to about 2⁻²⁸; undo the normalisation, then fix the last bits.
-    let mut q = (((a64 * r) >> 30) >> (shift / 2)).min(u64::from(u32::MAX));
-    while q * q > n {
+    // √m ≈ a·r/2³⁰ to about 2⁻²⁷; undo the normalisation, then fix the last bits.
+    let mut q = ((mul(a, r) >> 30) >> (shift / 2)).min(u64::from(u32::MAX)) as u32;
+    while mul(q, q) > n {
         q -= 1;
     }
-    while (q + 1).checked_mul(q + 1).is_some_and(|sq| sq <= n) {
+    while q < u32::MAX && mul(q + 1, q + 1) <= n {
         q += 1;
     }
-    q as u32
+    q
 }
 
 #[cfg(test)]

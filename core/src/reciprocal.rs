@@ -3,6 +3,8 @@
 //! and a correction to the exact floor. A 64-bit divide is a library call
 //! of a hundred-odd instructions on Cortex-M and RV32; this is about twenty.
 
+use crate::isqrt::mul;
+
 /// `2⁴⁰ / (2k + 1)` for the top byte `k ∈ [128, 256)` of `d`: `2⁶³ / d` at
 /// the middle of the byte's interval, good to 8 bits.
 const SEED: [u32; 128] = {
@@ -19,23 +21,28 @@ const SEED: [u32; 128] = {
 /// raised to 2³¹ (the caller normalises).
 #[inline]
 pub(crate) fn reciprocal(d: u32) -> u64 {
-    let d = u64::from(d.max(1 << 31));
-    let mut y = u64::from(SEED[((d >> 24) as usize) % 128]);
-    // y ≈ 2⁶³/d with relative error ε: err = 2⁶³ − d·y ≈ 2⁶³·ε (|·| < 2⁵⁶
-    // after the seed), and y += y·err/2⁶³ squares ε. y·(err >> 31) < 2³²·2²⁵.
+    let d = d.max(1 << 31);
+    let mut y = SEED[((d >> 24) as usize) % 128];
+    // y ≈ 2⁶³/d < 2³² with relative error ε: err = 2⁶³ − d·y ≈ 2⁶³·ε (|·| < 2⁵⁶
+    // after the seed), and y += y·err/2⁶³ squares ε: y·|err >> 31| < 2³²·2²⁵.
     for _ in 0..2 {
-        let err = (1u64 << 63).wrapping_sub(d * y) as i64;
-        y = (y as i64 + ((y as i64 * (err >> 31)) >> 32)) as u64;
+        let err = (1u64 << 63).wrapping_sub(mul(d, y)) as i64 >> 31;
+        let step = (mul(y, err.unsigned_abs() as u32) >> 32) as u32;
+        y = if err < 0 {
+            y - step
+        } else {
+            y.saturating_add(step)
+        };
     }
-    // Within a few units of the floor: d·y < 2³²·2³² stays in u64.
+    // Within a few units of the floor; the floor itself is below 2³².
     let limit = u64::MAX >> 1;
-    while d * y > limit {
+    while mul(d, y) > limit {
         y -= 1;
     }
-    while d * (y + 1) <= limit {
+    while y < u32::MAX && mul(d, y + 1) <= limit {
         y += 1;
     }
-    y
+    u64::from(y)
 }
 
 #[cfg(test)]

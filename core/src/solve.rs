@@ -6,6 +6,8 @@
 //! computes the same integers gives the same bytes.
 
 use crate::Config;
+use crate::isqrt::{isqrt, mul};
+use crate::reciprocal::reciprocal;
 
 /// Fields saturate at ±(2³¹ − 1)·2¹⁶ in Q32.32, so their Q16.16 values fit `I16F16`.
 const FIELD_MAX_Q32: u64 = (i32::MAX as u64) << 16;
@@ -73,19 +75,25 @@ pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2]
     let lambda = config.lambda8;
     let a8 = (s.a as u32) * 8 + lambda;
     let c8 = (s.c as u32) * 8 + lambda;
-    let b8 = i64::from(s.b) * 8;
-    let det = u64::from(a8) * u64::from(c8) - (b8 * b8) as u64;
+    // |8b| ≤ 2 130 739 200 < 2³¹.
+    let b8 = i64::from(s.b * 8);
+    let det = mul(a8, c8) - (b8 * b8) as u64;
 
     let big = s.p.unsigned_abs().max(s.q.unsigned_abs());
     let sp = (u64::BITS - big.leading_zeros()).saturating_sub(30);
-    // Truncate toward zero, so the solve stays odd in (p, q).
+    // Truncate toward zero, so the solve stays odd in (p, q): |p'|, |q'| < 2³⁰.
     let cut = |v: i64| -> i64 {
         let mag = (v.unsigned_abs() >> sp) as i64;
         if v < 0 { -mag } else { mag }
     };
     let (p, q) = (cut(s.p), cut(s.q));
-    let nx = i64::from(c8) * p - b8 * q;
-    let ny = i64::from(a8) * q - b8 * p;
+    // c8·p' with c8 < 2³² as one unsigned 32×32 product and a sign.
+    let scaled = |k: u32, v: i64| -> i64 {
+        let mag = mul(k, v.unsigned_abs() as u32) as i64;
+        if v < 0 { -mag } else { mag }
+    };
+    let nx = scaled(c8, p) - b8 * q;
+    let ny = scaled(a8, q) - b8 * p;
 
     let e = u64::BITS - det.leading_zeros();
     let d32 = if e > 32 {
@@ -93,7 +101,7 @@ pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2]
     } else {
         det << (32 - e)
     };
-    let r = crate::reciprocal::reciprocal(d32 as u32);
+    let r = reciprocal(d32 as u32) as u32;
     // v = prod · 2^k in Q32.32, k = (bits − 31) + sp + 4 − e − c_exp + 16.
     let base = sp as i32 + 20 - e as i32 - config.c_exp as i32;
     let quotient = |n: i64| -> i64 {
@@ -107,8 +115,8 @@ pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2]
         } else {
             mag << (31 - bits)
         };
-        let m1 = (n31 * r) >> 32;
-        let prod = m1 * u64::from(config.c_mant);
+        let m1 = (mul(n31 as u32, r) >> 32) as u32;
+        let prod = mul(m1, config.c_mant);
         let k = base + bits - 31;
         let mag = if k >= 0 {
             FIELD_MAX_Q32
@@ -128,8 +136,8 @@ pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2]
 pub(crate) fn magnitude_q32(v: [i64; 2]) -> u64 {
     let [x, y] = [v[0].unsigned_abs(), v[1].unsigned_abs()];
     let shift = (u64::BITS - (x | y).leading_zeros()).saturating_sub(24);
-    let (x, y) = (x >> shift, y >> shift);
-    u64::from(crate::isqrt::isqrt(x * x + y * y)) << shift
+    let (x, y) = ((x >> shift) as u32, (y >> shift) as u32);
+    u64::from(isqrt(mul(x, x) + mul(y, y))) << shift
 }
 
 #[cfg(test)]
