@@ -47,7 +47,13 @@ impl<const COLS: usize> Plan<COLS> {
         }
         let across = NonZeroUsize::new(w.div_ceil(tile_width.get())).ok_or(Error::EmptyFrame)?;
         let down = NonZeroUsize::new(h.div_ceil(tile_height.get())).ok_or(Error::EmptyFrame)?;
-        Ok(Self { config, tile_width, tile_height, across, down })
+        Ok(Self {
+            config,
+            tile_width,
+            tile_height,
+            across,
+            down,
+        })
     }
 
     /// The widest strips this engine allows, each the full frame height.

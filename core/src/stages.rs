@@ -55,7 +55,8 @@ fn neighbourhoods<T: Copy + Default, const K: usize>(
         Some(first) if cols.end > start => row.get(first..cols.end + r).unwrap_or(&[]),
         _ => &[],
     };
-    src.windows(K).map(|w| <[T; K]>::try_from(w).unwrap_or([T::default(); K]))
+    src.windows(K)
+        .map(|w| <[T; K]>::try_from(w).unwrap_or([T::default(); K]))
 }
 
 /// Columns `cols` of a row, to be read (empty if out of range).
@@ -149,7 +150,9 @@ pub(crate) fn boundary_minus_domain<const COLS: usize>(
     let cols = span::<COLS>(n, 2);
     let taps = |v| widened::<i16, 5>(v, cols.clone());
     let parts = taps(v1).zip(taps(v2)).zip(taps(v3)).zip(taps(v4));
-    let outs = columns(ex, cols.clone()).iter_mut().zip(columns(ey, cols.clone()));
+    let outs = columns(ex, cols.clone())
+        .iter_mut()
+        .zip(columns(ey, cols.clone()));
     for ((((v1, v2), v3), v4), (ex, ey)) in parts.zip(outs) {
         let kb_x = v1[3] - v1[1];
         let bs_x = (v2[3] + v2[4]) - (v2[1] + v2[0]);
@@ -223,7 +226,9 @@ pub(crate) fn structure_row<const COLS: usize>(
         .zip(columns(yy, cols.clone()))
         .zip(columns(xd, cols.clone()))
         .zip(columns(yd, cols.clone()));
-    for (((([vx_l, vx_c, vx_r], ((&vy_u, &vy_c), &vy_d)), ((pu, pm), pd)), &dd), out) in inputs.zip(outputs) {
+    for (((([vx_l, vx_c, vx_r], ((&vy_u, &vy_c), &vy_d)), ((pu, pm), pd)), &dd), out) in
+        inputs.zip(outputs)
+    {
         let ((((xx, xy), yy), xd), yd) = out;
         let q = (vx_r - vx_l) + (vy_d - vy_u);
         let x = (pu[2] - pu[0]) + 2 * (pm[2] - pm[0]) + (pd[2] - pd[0]);
