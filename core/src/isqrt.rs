@@ -18,13 +18,13 @@ const SEED: [u32; 192] = {
 
 /// `a · b` widened: one 32×32→64 multiply on every 32-bit target.
 #[inline(always)]
-pub(crate) fn mul(a: u32, b: u32) -> u64 {
+pub fn mul(a: u32, b: u32) -> u64 {
     u64::from(a) * u64::from(b)
 }
 
 /// `⌊√n⌋`, exact for every `n < 2⁶⁴`.
 #[inline]
-pub(crate) fn isqrt(n: u64) -> u32 {
+pub fn isqrt(n: u64) -> u32 {
     if n < 4 {
         return (n != 0) as u32;
     }

@@ -20,7 +20,7 @@ const SEED: [u32; 128] = {
 /// `⌊(2⁶³ − 1) / d⌋` for `d ∈ [2³¹, 2³²)`, in `[2³¹, 2³²)`; other `d` are
 /// raised to 2³¹ (the caller normalises).
 #[inline]
-pub(crate) fn reciprocal(d: u32) -> u64 {
+pub fn reciprocal(d: u32) -> u64 {
     let d = d.max(1 << 31);
     let mut y = SEED[((d >> 24) as usize) % 128];
     // y ≈ 2⁶³/d < 2³² with relative error ε: err = 2⁶³ − d·y ≈ 2⁶³·ε (|·| < 2⁵⁶

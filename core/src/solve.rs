@@ -31,7 +31,7 @@ fn signed(negative: bool, mag: u64) -> i64 {
 
 /// A field component from Q32.32 to Q16.16 (`I16F16` bits), to nearest.
 #[inline(always)]
-pub(crate) fn q16(v: i64) -> i32 {
+pub fn q16(v: i64) -> i32 {
     signed(v < 0, round_shift(v.unsigned_abs(), 16)) as i32
 }
 
@@ -39,7 +39,7 @@ pub(crate) fn q16(v: i64) -> i32 {
 /// `round(V · c · 2¹⁶)`, `c = s · 2¹⁶ / 768 < 86`, half away from zero.
 /// `|V| · c_mant < 2²⁴ · 2³² = 2⁵⁶`, shifted by `c_exp − 16 ≥ 8`: below 2⁴⁸.
 #[inline(always)]
-pub(crate) fn curl_free_q32(config: &Config, v: i32) -> i64 {
+pub fn curl_free_q32(config: &Config, v: i32) -> i64 {
     let mag = u64::from(v.unsigned_abs()) * u64::from(config.c_mant);
     signed(v < 0, round_shift(mag, config.c_exp - 16))
 }
@@ -47,13 +47,16 @@ pub(crate) fn curl_free_q32(config: &Config, v: i32) -> i64 {
 /// The structure sums of one pixel (SPEC §3 step 8), as exact integers:
 /// `a = G256 ⋆ X²` … and `p = G256 ⋆ (X · Dn)` … (formats in `stages`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct StructureSums {
-    /// `0 ≤ a, c ≤ 256 · 1020² = 266 342 400 < 2²⁸`; `b² ≤ a·c`.
+pub struct StructureSums {
+    /// `G256 ⋆ X²`: `0 ≤ a ≤ 256 · 1020² = 266 342 400 < 2²⁸`.
     pub a: i32,
+    /// `G256 ⋆ XY`: `b² ≤ a·c` (Cauchy–Schwarz).
     pub b: i32,
+    /// `G256 ⋆ Y²`, bounded as `a`.
     pub c: i32,
-    /// `|p|, |q| ≤ 256 · 1020 · |Dn| < 2⁵⁹`.
+    /// `G256 ⋆ (X · Dn)`: `|p| ≤ 256 · 1020 · |Dn| < 2⁵⁹`.
     pub p: i64,
+    /// `G256 ⋆ (Y · Dn)`, bounded as `p`.
     pub q: i64,
 }
 
@@ -71,7 +74,7 @@ pub(crate) struct StructureSums {
 /// - `|N|` normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · r < 2⁶³`; its top 31 bits
 ///   times `c_mant < 2³²` stay below 2⁶³. Relative error about 2⁻²⁸.
 #[inline(always)]
-pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2] {
+pub fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2] {
     let lambda = config.lambda8;
     let a8 = (s.a as u32) * 8 + lambda;
     let c8 = (s.c as u32) * 8 + lambda;
@@ -133,7 +136,7 @@ pub(crate) fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2]
 /// 2⁴⁹, where the root's seed is within one step of exact), the exact integer
 /// root, shifted back. Relative error below 2⁻²¹.
 #[inline(always)]
-pub(crate) fn magnitude_q32(v: [i64; 2]) -> u64 {
+pub fn magnitude_q32(v: [i64; 2]) -> u64 {
     let [x, y] = [v[0].unsigned_abs(), v[1].unsigned_abs()];
     let shift = (u64::BITS - (x | y).leading_zeros()).saturating_sub(24);
     let (x, y) = ((x >> shift) as u32, (y >> shift) as u32);

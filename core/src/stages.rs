@@ -82,7 +82,7 @@ fn columns<T>(row: &mut [T], cols: core::ops::Range<usize>) -> &mut [T] {
 
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[inline(always)]
-pub(crate) fn vertical_binomial<T, const COLS: usize>(
+pub fn vertical_binomial<T, const COLS: usize>(
     rows: [&[T; COLS]; 5],
     out: &mut [T; COLS],
     n: usize,
@@ -116,7 +116,7 @@ fn horizontal_binomial<T, const COLS: usize>(
 }
 
 /// Rows of one channel pair (x, y).
-pub(crate) type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T; COLS]);
+pub type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T; COLS]);
 
 /// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it.
 ///
@@ -125,7 +125,7 @@ pub(crate) type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T;
 /// `Kby3 = [−1 0 1]ᵀ⊗[1 4 1]`, `Box⋆Soby = [−1 −1 0 1 1]ᵀ⊗[1 3 4 3 1]`:
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
-pub(crate) fn boundary_minus_domain<const COLS: usize>(
+pub fn boundary_minus_domain<const COLS: usize>(
     d: [&[i16; COLS]; 5],
     vert: &mut [[i16; COLS]; 4],
     e: Pair<'_, i32, COLS>,
@@ -164,7 +164,7 @@ pub(crate) fn boundary_minus_domain<const COLS: usize>(
 }
 
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five `E` rows centred on it.
-pub(crate) fn smooth<const COLS: usize>(
+pub fn smooth<const COLS: usize>(
     e: [[&[i32; COLS]; 5]; 2],
     vert: &mut [[i32; COLS]; 2],
     v: Pair<'_, i32, COLS>,
@@ -180,24 +180,31 @@ pub(crate) fn smooth<const COLS: usize>(
 
 /// The rows one residual row reads: `V` above, at and below it, `p0` likewise,
 /// and `d` at it.
-pub(crate) struct ResidualInputs<'a, const COLS: usize> {
+pub struct ResidualInputs<'a, const COLS: usize> {
+    /// `V` x at the row.
     pub vx: &'a [i32; COLS],
+    /// `V` y above, at and below the row.
     pub vy: [&'a [i32; COLS]; 3],
+    /// `p0` above, at and below the row.
     pub p0: [&'a [u8; COLS]; 3],
+    /// `d = p1 − p0` at the row.
     pub d: &'a [i16; COLS],
+    /// `κ = 6144 / s` (see `params`).
     pub kappa: i64,
 }
 
 /// Scratch rows of the five structure products (`repr(C)`: see `working_bytes`).
 #[repr(C)]
-pub(crate) struct Products<const COLS: usize> {
+pub struct Products<const COLS: usize> {
+    /// `X·Dn`, `Y·Dn`.
     pub wide: [[i64; COLS]; 2],
+    /// `X²`, `XY`, `Y²`.
     pub small: [[i32; COLS]; 3],
 }
 
 /// The five products `X², XY, Y²` and `X·Dn, Y·Dn` on `[5, n−5)`, then their
 /// horizontal `G` on `[7, n−7)` into one row of each sum ring.
-pub(crate) fn structure_row<const COLS: usize>(
+pub fn structure_row<const COLS: usize>(
     input: &ResidualInputs<'_, COLS>,
     products: &mut Products<COLS>,
     sums_small: [&mut [i32; COLS]; 3],
