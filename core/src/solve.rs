@@ -2,8 +2,8 @@
 //! pixels, the regularised 2×2 solve (SPEC §3 step 9) and the magnitudes.
 //!
 //! Every routine here is a fixed sequence of integer operations (shifts,
-//! 32×32→64 products, one 64/64 division per pixel), so every target that
-//! computes the same integers gives the same bytes.
+//! 32×32→64 products, no divide), so every target that computes the same
+//! integers gives the same bytes.
 
 use crate::Config;
 use crate::isqrt::{isqrt, mul};
@@ -29,19 +29,26 @@ fn signed(negative: bool, mag: u64) -> i64 {
     if negative { -mag } else { mag }
 }
 
-/// A field component from Q32.32 to Q16.16 (`I16F16` bits), to nearest.
+/// A field component from Q32.32 to Q16.16 (`I16F16` bits), to nearest,
+/// half away from zero: `(|v| + 2¹⁵) / 2¹⁶` with `|v|` limited to
+/// [`FIELD_MAX_Q32`], so the result is at most 2³¹ − 1.
 #[inline(always)]
 pub fn q16(v: i64) -> i32 {
-    signed(v < 0, round_shift(v.unsigned_abs(), 16)) as i32
+    let mag = (v.unsigned_abs().min(FIELD_MAX_Q32) + (1 << 15)) >> 16;
+    if v < 0 { -(mag as i32) } else { mag as i32 }
 }
 
 /// `v_c` in Q32.32 from `V` (units `s/768`, `|V| ≤ 1.02e7 < 2²⁴`):
 /// `round(V · c · 2¹⁶)`, `c = s · 2¹⁶ / 768 < 86`, half away from zero.
 /// `|V| · c_mant < 2²⁴ · 2³² = 2⁵⁶`, shifted by `c_exp − 16 ≥ 8`: below 2⁴⁸.
+/// The shift `c_exp − 16` lies in `[8, 28]` for every admissible `s`, and
+/// `|v_c| < 2⁴⁶` needs no saturation.
 #[inline(always)]
 pub fn curl_free_q32(config: &Config, v: i32) -> i64 {
-    let mag = u64::from(v.unsigned_abs()) * u64::from(config.c_mant);
-    signed(v < 0, round_shift(mag, config.c_exp - 16))
+    let mag = mul(v.unsigned_abs(), config.c_mant);
+    let shift = config.c_exp - 16;
+    let mag = ((mag + (1 << (shift - 1))) >> shift) as i64;
+    if v < 0 { -mag } else { mag }
 }
 
 /// The structure sums of one pixel (SPEC §3 step 8), as exact integers:
