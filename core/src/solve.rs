@@ -176,6 +176,17 @@ mod tests {
         [(c * p - b * q) / det, (a * q - b * p) / det]
     }
 
+    /// The solve's larger component error in Q16 steps, and `|v|` in Q16 steps.
+    fn q16_error(cfg: &Config, s: StructureSums) -> (f64, f64) {
+        let got = divergence_free_q32(cfg, s).map(q16);
+        let want = oracle(s);
+        let err = got.iter().zip(want).fold(0.0f64, |e, (g, w)| {
+            let w16 = (w * 65536.0).clamp(-(i32::MAX as f64), i32::MAX as f64);
+            e.max((*g as f64 - w16).abs())
+        });
+        (err, 65536.0 * want[0].hypot(want[1]))
+    }
+
     #[test]
     fn solve_matches_f64_over_extremes() {
         let cfg = config();
@@ -195,18 +206,12 @@ mod tests {
                                 p,
                                 q,
                             };
-                            let got = divergence_free_q32(&cfg, s).map(q16);
-                            let want = oracle(s);
-                            let norm = 65536.0 * want[0].hypot(want[1]);
-                            for (g, w) in got.iter().zip(want) {
-                                let w16 = (w * 65536.0).clamp(-(i32::MAX as f64), i32::MAX as f64);
-                                let err = (*g as f64 - w16).abs();
-                                // p and q share one shift: a component whose own scale is far
-                                // below the other's keeps only |v|'s precision. Sums that come
-                                // from real pixels are tighter (next test).
-                                assert!(err <= 2.0 + 1e-5 * norm, "{s:?}: {g} vs {w16}");
-                                worst = worst.max(err);
-                            }
+                            // p and q share one shift: a component whose own scale is far
+                            // below the other's keeps only |v|'s precision. Sums that come
+                            // from real pixels are tighter (next test).
+                            let (err, norm) = q16_error(&cfg, s);
+                            assert!(err <= 2.0 + 1e-5 * norm, "{s:?}: error {err}");
+                            worst = worst.max(err);
                         }
                     }
                 }
@@ -246,15 +251,9 @@ mod tests {
                 s.p += w * x * dn;
                 s.q += w * y * dn;
             }
-            let got = divergence_free_q32(&cfg, s).map(q16);
-            let want = oracle(s);
-            let norm = 65536.0 * want[0].hypot(want[1]);
-            for (g, w) in got.iter().zip(want) {
-                let w16 = (w * 65536.0).clamp(-(i32::MAX as f64), i32::MAX as f64);
-                let err = (*g as f64 - w16).abs();
-                assert!(err <= 1.0 + 1e-7 * norm, "{s:?}: {g} vs {w16}");
-                worst = worst.max(err / norm.max(1.0));
-            }
+            let (err, norm) = q16_error(&cfg, s);
+            assert!(err <= 1.0 + 1e-7 * norm, "{s:?}: error {err}");
+            worst = worst.max(err / norm.max(1.0));
         }
         std::println!("solve of pixel sums: worst error {worst:e} of |v|");
     }
