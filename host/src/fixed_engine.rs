@@ -139,41 +139,47 @@ pub fn compute_fixed_parallel(
 ) -> Result<FixedOutput, HostError> {
     let (plan, frames) = prepare(prev, next, params, tile)?;
     let (width, height) = prev.size();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()
-        .map_err(|e| HostError::invalid("--threads", e.to_string()))?;
-    let tiles: Vec<(Tile, Vec<FlowPixel>)> = pool.install(|| {
-        (0..plan.tile_count())
-            .into_par_iter()
-            .filter_map(|index| plan.tile(index).map(|tile| (index, tile)))
-            .map_init(
-                || Box::new(HostEngine::new()),
-                |engine, (index, tile)| {
-                    let mut buffer = PixelPlane {
-                        width: tile.width,
-                        pixels: vec![FlowPixel::default(); tile.width * tile.height],
-                    };
-                    // Rows arrive in frame coordinates: shift them into the tile's buffer.
-                    let mut shifted = Shifted {
-                        inner: &mut buffer,
-                        x: tile.x,
-                        y: tile.y,
-                    };
-                    engine
-                        .run_tile(&plan, &frames, index, &mut shifted)
-                        .map(|()| (tile, buffer.pixels))
-                },
-            )
-            .collect::<Result<_, _>>()
-    })?;
     let mut frame = PixelPlane {
         width,
         pixels: vec![FlowPixel::default(); width * height],
     };
-    for (tile, pixels) in &tiles {
-        for (row, chunk) in pixels.chunks(tile.width).enumerate() {
-            frame.row(tile.y + row, tile.x, chunk);
+    if threads <= 1 {
+        // One core: no pool, no per-tile buffers.
+        let mut engine = Box::new(HostEngine::new());
+        engine.run(&plan, &frames, &mut frame)?;
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| HostError::invalid("--threads", e.to_string()))?;
+        let tiles: Vec<(Tile, Vec<FlowPixel>)> = pool.install(|| {
+            (0..plan.tile_count())
+                .into_par_iter()
+                .filter_map(|index| plan.tile(index).map(|tile| (index, tile)))
+                .map_init(
+                    || Box::new(HostEngine::new()),
+                    |engine, (index, tile)| {
+                        let mut buffer = PixelPlane {
+                            width: tile.width,
+                            pixels: vec![FlowPixel::default(); tile.width * tile.height],
+                        };
+                        // Rows arrive in frame coordinates: shift them into the tile's buffer.
+                        let mut shifted = Shifted {
+                            inner: &mut buffer,
+                            x: tile.x,
+                            y: tile.y,
+                        };
+                        engine
+                            .run_tile(&plan, &frames, index, &mut shifted)
+                            .map(|()| (tile, buffer.pixels))
+                    },
+                )
+                .collect::<Result<_, _>>()
+        })?;
+        for (tile, pixels) in &tiles {
+            for (row, chunk) in pixels.chunks(tile.width).enumerate() {
+                frame.row(tile.y + row, tile.x, chunk);
+            }
         }
     }
     let (scale_d, scale_c) = match scaling {

@@ -19,11 +19,16 @@
 pub mod atomic;
 pub mod cli;
 mod error;
+pub mod eval;
 pub mod fixed_engine;
 pub mod gray;
 pub mod image_io;
 pub mod npy;
+pub mod outputs;
+pub mod pipeline;
 pub mod reference;
+pub mod sequence;
+pub mod viz;
 
 pub use error::{HostError, ImageProblem};
 pub use gray::{Gray, luma_bt601};

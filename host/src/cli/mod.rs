@@ -9,7 +9,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 pub mod budget;
+pub mod dataset;
+pub mod eval;
 pub mod pair;
+mod progress;
+pub mod run;
 pub mod values;
 
 const EXAMPLES: &str = "\
@@ -37,6 +41,18 @@ pub enum Command {
     Pair(pair::PairArgs),
     /// Working memory and halo overhead of a tiling (for firmware budgets).
     Budget(budget::BudgetArgs),
+    /// Every consecutive frame pair of a video, frame folder or stream, one
+    /// output per pair (the built-in demo sequence when INPUT is omitted).
+    #[command(after_help = run::EXAMPLES)]
+    Run(run::RunArgs),
+    /// Mirror a tree of videos and frame folders into folders of outputs,
+    /// on all cores; rerun to resume.
+    #[command(after_help = dataset::EXAMPLES)]
+    Dataset(dataset::DatasetArgs),
+    /// Controlled scenes with exact ground truth: ReynoldsFlow against
+    /// Horn-Schunck and Lucas-Kanade; a markdown report with plots.
+    #[command(after_help = eval::EXAMPLES)]
+    Eval(eval::EvalArgs),
 }
 
 /// Parse `args` (program name first), run, and report.
@@ -52,6 +68,9 @@ where
     let result = match &cli.command {
         Command::Pair(args) => pair::run(args),
         Command::Budget(args) => budget::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Dataset(args) => dataset::run(args),
+        Command::Eval(args) => eval::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,350 @@
+//! `reynoldsflow run`: a whole frame sequence to one output per
+//! consecutive frame pair (SPEC §5), streamed, on all cores.
+
+use std::io::{self, Write};
+use std::path::PathBuf;
+use std::sync::Once;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use reynoldsflow_core::IntensityScale;
+
+use super::progress::Progress;
+use super::values::{self, EngineKind, ScaleArg, TileSize};
+use crate::HostError;
+use crate::outputs::{self, DirWriter, Fields, OutputSpec, StreamFormat, Variant};
+use crate::pipeline::{self, Compute, Destination, Options, Summary};
+use crate::sequence::{self, InputSpec};
+
+/// Examples shown by `reynoldsflow run --help`.
+pub const EXAMPLES: &str = "\
+Examples:
+  reynoldsflow run
+      the built-in demo sequence (a rolling ball, a panning camera) into reynoldsflow-out/
+  reynoldsflow run clip.mp4 --out flows/
+      any video ffmpeg decodes: flows/000000.png, flows/000001.png, ...
+  reynoldsflow run frames/ --out reps/ --keep-count
+      a folder of PNG/JPEG/PGM frames (natural order); reps/<frame stem>.png, one per frame
+  reynoldsflow run 'frames/img_*.jpg' --out out/ --viz --npy --flo
+      also out/hsv/*.png (colour wheel of v_R), out/{v_c,v_d,v_R}/*.npy, out/v_R/*.flo
+  reynoldsflow run clip.y4m --variant dc0 --scale fixed:8,32 --out ablation/
+      the [|v_d|, 0, f] variant with constant gains
+  cat frames.gray | reynoldsflow run - --raw 640x480 --out out/
+      raw 8-bit gray frames on stdin
+  reynoldsflow run clip.mp4 --out - --format y4m | ffmpeg -i - -c:v libx264 rep.mp4
+      stream the representation into an encoder";
+
+/// The engine and its parameters (shared by `run` and `dataset`).
+#[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Computation")]
+pub struct EngineArgs {
+    /// Engine: the fixed-point core, or the float64 reference.
+    #[arg(long, value_enum, default_value_t = EngineKind::Fixed)]
+    pub engine: EngineKind,
+    /// Magnitudes to bytes: per-frame min-max, or fixed gains KD (|v_d|)
+    /// and KC (|v_c|), the same for every frame.
+    #[arg(long, value_name = "minmax|fixed:KD,KC", default_value = "minmax", value_parser = values::parse_scale)]
+    pub scale: ScaleArg,
+    /// Intensity scale s (f = pixel * s), an exact ratio or decimal.
+    #[arg(long, value_name = "S", default_value = "1/255", value_parser = values::parse_intensity_scale)]
+    pub intensity_scale: IntensityScale,
+    /// Tikhonov term lambda of the 2x2 solve.
+    #[arg(long, value_name = "L", default_value = "1e-4", value_parser = values::parse_lambda)]
+    pub lambda: f64,
+    /// Tile size for the fixed engine (width at most 128); every tiling
+    /// gives the same output.
+    #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
+    pub tile: Option<TileSize>,
+    /// Worker threads [default: all cores]. The output does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+}
+
+impl EngineArgs {
+    /// The checked computation.
+    pub fn compute(&self) -> Result<Compute, HostError> {
+        Compute::new(
+            self.engine,
+            self.scale,
+            self.intensity_scale,
+            self.lambda,
+            self.tile,
+        )
+    }
+
+    /// `--threads`, or every core.
+    pub fn threads(&self) -> usize {
+        self.threads.map_or_else(
+            || std::thread::available_parallelism().map_or(1, |n| n.get()),
+            |n| n as usize,
+        )
+    }
+}
+
+/// What to write per result (shared by `run` and `dataset`).
+#[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Outputs")]
+pub struct OutputArgs {
+    /// The image of each result, DIR/STEM.png: dc = [|v_d|, |v_c|, f]
+    /// (the ReynoldsFlow representation); dc0 = [|v_d|, 0, f]; cd =
+    /// [|v_c|, |v_d|, f]; hsv = colour wheel of v_R.
+    #[arg(long, value_enum, default_value_t = Variant::Dc)]
+    pub variant: Variant,
+    /// Do not write DIR/STEM.png (only the other outputs asked for).
+    #[arg(long)]
+    pub no_rep: bool,
+    /// Also write DIR/hsv/STEM.png: the Middlebury colour wheel of
+    /// v_R = v_c + v_d (hue = direction, saturation = length).
+    #[arg(long)]
+    pub viz: bool,
+    /// Colour-wheel radius in pixels for hsv images [default: each frame's
+    /// longest vector].
+    #[arg(long, value_name = "PX", value_parser = parse_positive)]
+    pub hsv_max: Option<f64>,
+    /// Also write fields as DIR/FIELD/STEM.npy: float64, shape
+    /// (H, W, 2), last axis (x, y) in pixels. FIELDS: comma-separated
+    /// v_c, v_d, v_R [default: all three].
+    #[arg(long, value_name = "FIELDS", num_args = 0..=1, require_equals = true,
+          default_missing_value = "v_c,v_d,v_R", value_parser = outputs::parse_field_list)]
+    pub npy: Option<Fields>,
+    /// Also write fields as Middlebury .flo (f32 u, v) in
+    /// DIR/FIELD/STEM.flo [default: v_R].
+    #[arg(long, value_name = "FIELDS", num_args = 0..=1, require_equals = true,
+          default_missing_value = "v_R", value_parser = outputs::parse_field_list)]
+    pub flo: Option<Fields>,
+    /// N outputs for N frames: the last frame gets a copy of the last
+    /// result, so every frame has one (label files stay aligned).
+    #[arg(long)]
+    pub keep_count: bool,
+    /// Read at most N frames of each input.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_frames: Option<u64>,
+}
+
+fn parse_positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err("expected a positive number of pixels (e.g. 2.5)".to_owned()),
+    }
+}
+
+impl OutputArgs {
+    /// The output spec.
+    pub fn spec(&self) -> OutputSpec {
+        OutputSpec {
+            variant: self.variant,
+            rep: !self.no_rep,
+            viz: self.viz,
+            npy: self.npy.clone().map(|f| f.0).unwrap_or_default(),
+            flo: self.flo.clone().map(|f| f.0).unwrap_or_default(),
+            hsv_max: self.hsv_max,
+        }
+    }
+
+    /// Pipeline options with `threads`.
+    pub fn options(&self, threads: usize) -> Options {
+        Options {
+            threads,
+            keep_count: self.keep_count,
+            max_frames: self.max_frames.map(|n| n as usize),
+        }
+    }
+}
+
+/// Arguments of `reynoldsflow run`.
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// A video (Y4M, or anything ffmpeg decodes: MP4, AVI, MKV, ...), a
+    /// folder or quoted glob of PNG/JPEG/PGM frames, or - for stdin (Y4M,
+    /// or raw frames with --raw). None: the built-in demo sequence.
+    #[arg(value_name = "INPUT")]
+    pub input: Option<PathBuf>,
+    /// Output folder (created if missing), or - for a stream on stdout.
+    #[arg(long, short, value_name = "DIR|-", default_value = "reynoldsflow-out")]
+    pub out: PathBuf,
+    /// Stream format of --out - [default: rgb24]: raw RGB8 frames back to
+    /// back (e.g. ffmpeg -f rawvideo -pix_fmt rgb24 -s WxH -i -, or NumPy),
+    /// or Y4M C444 for any Y4M reader or encoder.
+    #[arg(long, value_enum)]
+    pub format: Option<StreamFormat>,
+    /// INPUT holds raw 8-bit gray frames of this size, back to back.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub raw: Option<(usize, usize)>,
+    /// The computation.
+    #[command(flatten)]
+    pub engine: EngineArgs,
+    /// The outputs.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+fn parse_size(s: &str) -> Result<(usize, usize), String> {
+    values::parse_tile(s)
+        .map(|t| (t.width, t.height))
+        .map_err(|_| "expected WxH with both sides at least 1 (e.g. 640x480)".to_owned())
+}
+
+/// Stop cleanly on Ctrl-C (and SIGTERM): pairs in flight finish, no new
+/// one starts; a second Ctrl-C ends the process at once.
+pub fn install_interrupt_handler() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Without a handler the default (immediate exit) stays: still no partial file
+        // under a final name, only hidden temps that the next run removes.
+        let _ = ctrlc::set_handler(|| {
+            if pipeline::INTERRUPTED.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    });
+}
+
+/// `n` with its unit, singular or plural.
+pub fn count(n: usize, unit: &str) -> String {
+    format!("{n} {unit}{}", if n == 1 { "" } else { "s" })
+}
+
+/// Run the subcommand.
+pub fn run(args: &RunArgs) -> Result<(), HostError> {
+    let compute = args.engine.compute()?;
+    let spec = args.output.spec();
+    let to_stdout = args.out.as_os_str() == "-";
+    if !spec.writes_anything() {
+        return Err(HostError::invalid(
+            "--no-rep",
+            "nothing left to write; add --viz, --npy or --flo",
+        ));
+    }
+    if to_stdout && (spec.viz || !spec.npy.is_empty() || !spec.flo.is_empty() || !spec.rep) {
+        return Err(HostError::invalid(
+            "--out -",
+            "a stream carries the --variant images only; --viz, --npy, --flo and --no-rep need an output folder",
+        ));
+    }
+    if to_stdout && std::io::IsTerminal::is_terminal(&io::stdout()) {
+        return Err(HostError::invalid(
+            "--out -",
+            "stdout is a terminal; pipe the stream into a program (e.g. | ffmpeg -i - out.mp4) or give an output folder",
+        ));
+    }
+    if args.format.is_some() && !to_stdout {
+        return Err(HostError::invalid(
+            "--format",
+            "applies to --out - (a stream on stdout) only",
+        ));
+    }
+    let input = match &args.input {
+        None => {
+            if args.raw.is_some() {
+                return Err(HostError::invalid(
+                    "--raw",
+                    "needs INPUT (a file, or - for stdin)",
+                ));
+            }
+            InputSpec::Demo
+        }
+        Some(p) if p.as_os_str() == "-" => InputSpec::Stdin { raw: args.raw },
+        Some(p) => InputSpec::Path {
+            path: p.clone(),
+            raw: args.raw,
+        },
+    };
+    install_interrupt_handler();
+    let started = Instant::now();
+    let mut source = sequence::open(&input)?;
+    let options = args.output.options(args.engine.threads());
+    let total = Progress::enabled()
+        .then(|| source.frame_count_hint())
+        .flatten()
+        .map(|n| {
+            let n = options.max_frames.map_or(n, |m| n.min(m));
+            (n + usize::from(options.keep_count)).saturating_sub(1) as u64
+        });
+    let progress = Progress::new(total, "results");
+    let mut tick = || progress.inc();
+
+    let (summary, place) = if to_stdout {
+        let stdout = io::stdout();
+        let mut writer: Box<dyn Write + Send> = Box::new(io::BufWriter::new(stdout));
+        let dest = Destination::Stream {
+            spec: &spec,
+            format: args.format.unwrap_or_default(),
+            writer: &mut *writer,
+        };
+        let summary = pipeline::process(&mut *source, &compute, dest, options, &mut tick);
+        (summary, "stdout".to_owned())
+    } else {
+        let dir = DirWriter::prepare(&args.out, &spec)?;
+        let summary = pipeline::process(
+            &mut *source,
+            &compute,
+            Destination::Dir(&dir),
+            options,
+            &mut tick,
+        );
+        (summary, format!("{}/", args.out.display()))
+    };
+    progress.finish();
+    let summary = summary?;
+    let name = sequence::display_name(&input);
+    report(
+        &summary,
+        &name,
+        &place,
+        &compute,
+        &spec,
+        started.elapsed().as_secs_f64(),
+    )?;
+    if input == InputSpec::Demo {
+        eprintln!(
+            "reynoldsflow: that was the built-in demo; on your footage: reynoldsflow run VIDEO|FRAME_FOLDER --out DIR (see reynoldsflow run --help)"
+        );
+    }
+    Ok(())
+}
+
+fn report(
+    summary: &Summary,
+    name: &str,
+    place: &str,
+    compute: &Compute,
+    spec: &OutputSpec,
+    seconds: f64,
+) -> Result<(), HostError> {
+    if summary.stream_closed {
+        eprintln!(
+            "reynoldsflow: the reader of stdout closed it after {}; stopped",
+            count(summary.outputs, "output")
+        );
+        return Ok(());
+    }
+    if summary.frames == 0 {
+        return Err(sequence::input_error(name, "no frames"));
+    }
+    let size = summary
+        .size
+        .map_or(String::new(), |(w, h)| format!(" of {w}x{h}"));
+    let engine = match compute.engine() {
+        EngineKind::Fixed => "fixed",
+        EngineKind::Float => "float",
+    };
+    if summary.results == 0 {
+        eprintln!(
+            "reynoldsflow: {name}: 1 frame{size}, so no result (a result needs a pair of frames); nothing written"
+        );
+        return Ok(());
+    }
+    let repeated = if summary.outputs > summary.results {
+        " (last repeated for --keep-count)"
+    } else {
+        ""
+    };
+    eprintln!(
+        "reynoldsflow: {} from {}{size} of {name} -> {place}{repeated} in {seconds:.2} s ({:.1} pairs/s; {engine} engine, variant {})",
+        count(summary.outputs, "output"),
+        count(summary.frames, "frame"),
+        summary.results as f64 / seconds.max(1e-9),
+        spec.variant.name()
+    );
+    Ok(())
+}

@@ -1,0 +1,94 @@
+//! Middlebury `.flo` files: the magic float `202021.25` (bytes `PIEH`),
+//! width and height as little-endian `i32`, then `u, v` as little-endian
+//! `f32` per pixel, row-major (x to the right, y down, in pixels).
+
+use crate::HostError;
+
+/// The tag float at the start of every `.flo` file.
+pub const TAG: f32 = 202_021.25;
+
+/// A flow field read from a `.flo` file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flo {
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// `u` (x) per pixel, row-major.
+    pub u: Vec<f32>,
+    /// `v` (y) per pixel.
+    pub v: Vec<f32>,
+}
+
+/// The bytes of a `.flo` file of the planes `u`, `v` (rounded to `f32`).
+///
+/// # Panics
+/// If the planes do not hold `width · height` values.
+pub fn encode(width: usize, height: usize, u: &[f64], v: &[f64]) -> Result<Vec<u8>, HostError> {
+    assert!(
+        u.len() == width * height && v.len() == width * height,
+        "plane size"
+    );
+    let side = |n: usize| {
+        i32::try_from(n).map_err(|_| {
+            HostError::invalid("--flo", format!("{width}x{height} is too large for .flo"))
+        })
+    };
+    let mut out = Vec::with_capacity(12 + 8 * width * height);
+    out.extend_from_slice(&TAG.to_le_bytes());
+    out.extend_from_slice(&side(width)?.to_le_bytes());
+    out.extend_from_slice(&side(height)?.to_le_bytes());
+    for (a, b) in u.iter().zip(v) {
+        out.extend_from_slice(&(*a as f32).to_le_bytes());
+        out.extend_from_slice(&(*b as f32).to_le_bytes());
+    }
+    Ok(out)
+}
+
+/// Parse a `.flo` file.
+pub fn decode(bytes: &[u8]) -> Result<Flo, String> {
+    let word = |i: usize| -> Option<[u8; 4]> { bytes.get(4 * i..4 * i + 4)?.try_into().ok() };
+    let (Some(tag), Some(w), Some(h)) = (word(0), word(1), word(2)) else {
+        return Err("too short for a .flo header".to_owned());
+    };
+    if f32::from_le_bytes(tag) != TAG {
+        return Err("not a .flo file (no PIEH tag)".to_owned());
+    }
+    let (w, h) = (i32::from_le_bytes(w), i32::from_le_bytes(h));
+    let (Ok(width), Ok(height)) = (usize::try_from(w), usize::try_from(h)) else {
+        return Err(format!("negative size {w}x{h}"));
+    };
+    let n = width * height;
+    if bytes.len() != 12 + 8 * n {
+        return Err(format!(
+            "{} bytes for a {width}x{height} field (expected {})",
+            bytes.len(),
+            12 + 8 * n
+        ));
+    }
+    let value = |i: usize| f32::from_le_bytes(word(3 + i).expect("length checked"));
+    Ok(Flo {
+        width,
+        height,
+        u: (0..n).map(|i| value(2 * i)).collect(),
+        v: (0..n).map(|i| value(2 * i + 1)).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_header() {
+        let bytes = encode(3, 2, &[0.5, -1.0, 2.0, 0.0, 1e-3, 7.25], &[1.0; 6]).unwrap();
+        assert_eq!(&bytes[..4], b"PIEH");
+        assert_eq!(bytes.len(), 12 + 48);
+        let flo = decode(&bytes).unwrap();
+        assert_eq!((flo.width, flo.height), (3, 2));
+        assert_eq!(flo.u, [0.5, -1.0, 2.0, 0.0, 1e-3, 7.25]);
+        assert_eq!(flo.v, [1.0; 6]);
+        assert!(decode(&bytes[..20]).is_err());
+        assert!(decode(b"garbage-garbage-").is_err());
+    }
+}

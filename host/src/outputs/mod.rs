@@ -1,0 +1,519 @@
+//! What `reynoldsflow run` and `dataset` write for each result, and where.
+//!
+//! In an output folder `DIR`, the result labelled with frame `STEM` is
+//!
+//! | file | with | content |
+//! |---|---|---|
+//! | `DIR/STEM.png` | (default; `--no-rep` drops it) | RGB8 image of the `--variant` ([`Variant`]) |
+//! | `DIR/hsv/STEM.png` | `--viz` | colour-wheel coding of `v_R` ([`crate::viz`]) |
+//! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64, shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
+//! | `DIR/v_R/STEM.flo` (or `v_c/`, `v_d/`) | `--flo` (or `--flo=v_c,…`) | Middlebury `.flo` ([`flo`]): `f32` `(u, v)` |
+//!
+//! so every kind of output of one frame has the same stem, in a folder of
+//! its own. Each file is written to a hidden temp name in its folder
+//! (`.STEM.png.XXXXXX.tmp`) and renamed into place when complete: a file
+//! under its final name is never partial. Temp files left by a killed run
+//! are removed by the next run into the same folder ([`clean_stale_temps`]).
+//!
+//! Or, with `--out -`, the `--variant` images go to standard output
+//! ([`StreamFormat`]).
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use npyz::WriterBuilder;
+
+use crate::{HostError, atomic, image_io, viz};
+
+pub mod flo;
+
+/// The representation variants (the paper's ablation), and the colour wheel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Variant {
+    /// [|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4).
+    #[default]
+    Dc,
+    /// [|v_d|, 0, f]: ablation without the curl-free magnitude.
+    Dc0,
+    /// [|v_c|, |v_d|, f]: ablation with the magnitudes swapped.
+    Cd,
+    /// Middlebury colour wheel of v_R = v_c + v_d.
+    Hsv,
+}
+
+impl Variant {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Dc => "dc",
+            Variant::Dc0 => "dc0",
+            Variant::Cd => "cd",
+            Variant::Hsv => "hsv",
+        }
+    }
+}
+
+/// A field written by `--npy` and `--flo`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Field {
+    /// Curl-free field `v_c`.
+    VC,
+    /// Divergence-free field `v_d`.
+    VD,
+    /// ReynoldsFlow `v_R = v_c + v_d`.
+    VR,
+}
+
+impl Field {
+    /// The name on the command line, and of its output folder.
+    pub fn name(self) -> &'static str {
+        match self {
+            Field::VC => "v_c",
+            Field::VD => "v_d",
+            Field::VR => "v_R",
+        }
+    }
+}
+
+/// A list of fields, as `--npy=v_c,v_R` gives it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Fields(pub Vec<Field>);
+
+/// Parse a comma-separated list of `v_c`, `v_d`, `v_R` (sorted, no repeats).
+pub fn parse_field_list(s: &str) -> Result<Fields, String> {
+    parse_fields(s).map(Fields)
+}
+
+/// Parse a comma-separated list of `v_c`, `v_d`, `v_R` (sorted, no repeats).
+pub fn parse_fields(s: &str) -> Result<Vec<Field>, String> {
+    let mut fields = Vec::new();
+    for part in s.split(',').map(str::trim) {
+        let field = match part {
+            "v_c" => Field::VC,
+            "v_d" => Field::VD,
+            "v_R" | "v_r" => Field::VR,
+            _ => {
+                return Err(format!(
+                    "'{part}' is not a field; expected v_c, v_d or v_R (comma-separated)"
+                ));
+            }
+        };
+        fields.push(field);
+    }
+    fields.sort();
+    fields.dedup();
+    Ok(fields)
+}
+
+/// One result: the fields of a frame pair and its representation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairFields {
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// `v_c` x, row-major.
+    pub vcx: Vec<f64>,
+    /// `v_c` y.
+    pub vcy: Vec<f64>,
+    /// `v_d` x.
+    pub vdx: Vec<f64>,
+    /// `v_d` y.
+    pub vdy: Vec<f64>,
+    /// The representation `[|v_d|, |v_c|, fⁿ]`, RGB8.
+    pub rep: Vec<u8>,
+}
+
+impl PairFields {
+    /// The `(x, y)` planes of a field.
+    pub fn field(&self, field: Field) -> (Vec<f64>, Vec<f64>) {
+        let add = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a + b).collect();
+        match field {
+            Field::VC => (self.vcx.clone(), self.vcy.clone()),
+            Field::VD => (self.vdx.clone(), self.vdy.clone()),
+            Field::VR => (add(&self.vcx, &self.vdx), add(&self.vcy, &self.vdy)),
+        }
+    }
+}
+
+/// What to write per result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputSpec {
+    /// The image `DIR/STEM.png` (and the stream) shows.
+    pub variant: Variant,
+    /// Write `DIR/STEM.png`.
+    pub rep: bool,
+    /// Write `DIR/hsv/STEM.png`.
+    pub viz: bool,
+    /// Fields written as `.npy`.
+    pub npy: Vec<Field>,
+    /// Fields written as `.flo`.
+    pub flo: Vec<Field>,
+    /// Colour-wheel radius in pixels; `None`: each frame's longest vector.
+    pub hsv_max: Option<f64>,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            variant: Variant::Dc,
+            rep: true,
+            viz: false,
+            npy: Vec::new(),
+            flo: Vec::new(),
+            hsv_max: None,
+        }
+    }
+}
+
+impl OutputSpec {
+    /// Whether anything at all is written.
+    pub fn writes_anything(&self) -> bool {
+        self.rep || self.viz || !self.npy.is_empty() || !self.flo.is_empty()
+    }
+
+    /// The RGB8 image of the `--variant`.
+    pub fn image(&self, f: &PairFields) -> Vec<u8> {
+        let mut rgb = f.rep.clone();
+        match self.variant {
+            Variant::Dc => {}
+            Variant::Dc0 => rgb.chunks_exact_mut(3).for_each(|p| p[1] = 0),
+            Variant::Cd => rgb.chunks_exact_mut(3).for_each(|p| p.swap(0, 1)),
+            Variant::Hsv => return self.hsv(f),
+        }
+        rgb
+    }
+
+    fn hsv(&self, f: &PairFields) -> Vec<u8> {
+        let (u, v) = f.field(Field::VR);
+        viz::flow_to_rgb(&u, &v, self.hsv_max)
+    }
+
+    /// Sub-folders of the output folder this spec writes into.
+    pub fn subdirs(&self) -> Vec<&'static str> {
+        let mut dirs = Vec::new();
+        if self.viz {
+            dirs.push("hsv");
+        }
+        for f in [Field::VC, Field::VD, Field::VR] {
+            if self.npy.contains(&f) || self.flo.contains(&f) {
+                dirs.push(f.name());
+            }
+        }
+        dirs
+    }
+
+    /// Every file of one result: `(path relative to the output folder, bytes)`.
+    pub fn files(&self, stem: &str, f: &PairFields) -> Result<Vec<(PathBuf, Vec<u8>)>, HostError> {
+        let (w, h) = (f.width, f.height);
+        let mut files = Vec::new();
+        if self.rep {
+            let png = image_io::encode_png(w, h, &self.image(f))?;
+            files.push((PathBuf::from(format!("{stem}.png")), png));
+        }
+        if self.viz {
+            let png = image_io::encode_png(w, h, &self.hsv(f))?;
+            files.push((Path::new("hsv").join(format!("{stem}.png")), png));
+        }
+        for field in [Field::VC, Field::VD, Field::VR] {
+            let (npy, flo) = (self.npy.contains(&field), self.flo.contains(&field));
+            if !(npy || flo) {
+                continue;
+            }
+            let (x, y) = f.field(field);
+            let dir = Path::new(field.name());
+            if npy {
+                files.push((dir.join(format!("{stem}.npy")), encode_npy_xy(h, w, &x, &y)));
+            }
+            if flo {
+                files.push((dir.join(format!("{stem}.flo")), flo::encode(w, h, &x, &y)?));
+            }
+        }
+        Ok(files)
+    }
+
+    /// The options as one canonical line (for dataset completion markers).
+    pub fn describe(&self) -> String {
+        let list = |v: &[Field]| v.iter().map(|f| f.name()).collect::<Vec<_>>().join(",");
+        format!(
+            "variant={} rep={} viz={} npy=[{}] flo=[{}] hsv_max={:?}",
+            self.variant.name(),
+            self.rep,
+            self.viz,
+            list(&self.npy),
+            list(&self.flo),
+            self.hsv_max
+        )
+    }
+}
+
+/// A `.npy` of shape `(height, width, 2)`, float64, C order: `[..., 0]` is
+/// `x`, `[..., 1]` is `y`.
+pub fn encode_npy_xy(height: usize, width: usize, x: &[f64], y: &[f64]) -> Vec<u8> {
+    assert!(
+        x.len() == height * width && y.len() == height * width,
+        "plane size"
+    );
+    let mut bytes = Vec::with_capacity(128 + 16 * x.len());
+    let mut writer = npyz::WriteOptions::<f64>::new()
+        .default_dtype()
+        .shape(&[height as u64, width as u64, 2])
+        .writer(&mut bytes)
+        .begin_nd()
+        .expect("writing to memory");
+    writer
+        .extend(x.iter().zip(y).flat_map(|(a, b)| [*a, *b]))
+        .expect("writing to memory");
+    writer.finish().expect("writing to memory");
+    bytes
+}
+
+/// Parse a `.npy` of shape `(H, W, 2)` float64: `(H, W, x plane, y plane)`.
+pub fn decode_npy_xy(bytes: &[u8]) -> Result<(usize, usize, Vec<f64>, Vec<f64>), String> {
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))?;
+    let [h, w, 2] = *npy.shape() else {
+        return Err(format!("shape {:?} is not (H, W, 2)", npy.shape()));
+    };
+    if npy.order() != npyz::Order::C {
+        return Err("Fortran order".to_owned());
+    }
+    let values = npy
+        .into_vec::<f64>()
+        .map_err(|e| format!("not float64: {e}"))?;
+    let x = values.iter().step_by(2).copied().collect();
+    let y = values.iter().skip(1).step_by(2).copied().collect();
+    Ok((h as usize, w as usize, x, y))
+}
+
+/// `--format` of `--out -`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum StreamFormat {
+    /// Raw RGB8 frames back to back, 3*W*H bytes each, no header.
+    #[default]
+    Rgb24,
+    /// YUV4MPEG2 C444 with the input's frame rate; BT.601 limited range
+    /// (lossy: RGB becomes YCbCr).
+    Y4m,
+}
+
+/// The Y4M stream header for `w × h` frames at `fps`.
+pub fn y4m_header(width: usize, height: usize, fps: (u32, u32)) -> String {
+    format!(
+        "YUV4MPEG2 W{width} H{height} F{}:{} Ip A1:1 C444\n",
+        fps.0, fps.1
+    )
+}
+
+/// A Y4M `C444` frame (`FRAME` line and the Y, Cb, Cr planes) of an RGB8
+/// image, BT.601 limited range in integer arithmetic:
+/// `Y = 16 + (66R + 129G + 25B + 128) >> 8`,
+/// `Cb = 128 + (−38R − 74G + 112B + 128) >> 8`,
+/// `Cr = 128 + (112R − 94G − 18B + 128) >> 8`.
+pub fn y4m_frame(rgb: &[u8]) -> Vec<u8> {
+    let n = rgb.len() / 3;
+    let mut out = Vec::with_capacity(6 + 3 * n);
+    out.extend_from_slice(b"FRAME\n");
+    let planes: [fn(i32, i32, i32) -> i32; 3] = [
+        |r, g, b| 16 + ((66 * r + 129 * g + 25 * b + 128) >> 8),
+        |r, g, b| 128 + ((-38 * r - 74 * g + 112 * b + 128) >> 8),
+        |r, g, b| 128 + ((112 * r - 94 * g - 18 * b + 128) >> 8),
+    ];
+    for plane in planes {
+        out.extend(
+            rgb.chunks_exact(3).map(|p| {
+                plane(i32::from(p[0]), i32::from(p[1]), i32::from(p[2])).clamp(0, 255) as u8
+            }),
+        );
+    }
+    out
+}
+
+/// The environment variable of the crash test hook: after this many
+/// results have been written, the next write leaves a partial temp file
+/// and the process aborts, as a kill in the middle of a write would.
+pub const ABORT_AFTER_ENV: &str = "REYNOLDSFLOW_ABORT_AFTER";
+
+/// Results written by this process (for [`ABORT_AFTER_ENV`]).
+static WRITTEN: AtomicUsize = AtomicUsize::new(0);
+
+fn abort_hook(dir: &Path, files: &[(PathBuf, Vec<u8>)]) {
+    let Some(limit) = std::env::var(ABORT_AFTER_ENV)
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    else {
+        return;
+    };
+    if WRITTEN.fetch_add(1, Ordering::SeqCst) < limit {
+        return;
+    }
+    if let Some((rel, bytes)) = files.first() {
+        let path = dir.join(rel);
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+        let parent = path.parent().unwrap_or(dir);
+        if let Ok(tmp) = tempfile::Builder::new()
+            .prefix(&format!(".{name}."))
+            .suffix(".tmp")
+            .tempfile_in(parent)
+        {
+            let _ = tmp.as_file().write_all(&bytes[..bytes.len() / 2]);
+            let _ = tmp.keep();
+        }
+    }
+    eprintln!("reynoldsflow: {ABORT_AFTER_ENV}={limit}: aborting");
+    std::process::abort();
+}
+
+/// Writes results into an output folder.
+#[derive(Debug)]
+pub struct DirWriter {
+    root: PathBuf,
+    spec: OutputSpec,
+}
+
+impl DirWriter {
+    /// Create `root` and the spec's sub-folders, and remove temp files a
+    /// killed run left there. Fails, naming the folder, when it cannot be
+    /// created or written.
+    pub fn prepare(root: &Path, spec: &OutputSpec) -> Result<Self, HostError> {
+        let not_writable = |path: &Path, e: std::io::Error| {
+            HostError::io(
+                path,
+                std::io::Error::new(e.kind(), format!("output folder not writable: {e}")),
+            )
+        };
+        if root.exists() && !root.is_dir() {
+            return Err(crate::sequence::input_error(
+                root,
+                "output exists and is not a folder",
+            ));
+        }
+        fs::create_dir_all(root).map_err(|e| not_writable(root, e))?;
+        for sub in spec.subdirs() {
+            let dir = root.join(sub);
+            fs::create_dir_all(&dir).map_err(|e| not_writable(&dir, e))?;
+        }
+        // Probe: a folder that exists but refuses new files fails now, not mid-run.
+        tempfile::Builder::new()
+            .prefix(".reynoldsflow-probe.")
+            .tempfile_in(root)
+            .map_err(|e| not_writable(root, e))?;
+        for sub in std::iter::once("").chain(spec.subdirs()) {
+            clean_stale_temps(&root.join(sub))?;
+        }
+        Ok(Self {
+            root: root.to_owned(),
+            spec: spec.clone(),
+        })
+    }
+
+    /// The output folder.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// Write every file of the result labelled `stem`.
+    pub fn write(&self, stem: &str, fields: &PairFields) -> Result<(), HostError> {
+        let files = self.spec.files(stem, fields)?;
+        abort_hook(&self.root, &files);
+        for (rel, bytes) in &files {
+            atomic::write_file(&self.root.join(rel), bytes)?;
+        }
+        Ok(())
+    }
+
+    /// `--keep-count`: copy every file of the result `from` to the stem `to`.
+    pub fn repeat(&self, from: &str, to: &str) -> Result<(), HostError> {
+        let mut names: Vec<PathBuf> = Vec::new();
+        if self.spec.rep {
+            names.push(PathBuf::from(from));
+        }
+        names.extend(self.spec.subdirs().iter().map(|d| Path::new(d).join(from)));
+        for base in names {
+            for ext in ["png", "npy", "flo"] {
+                let src = self.root.join(base.with_extension(ext));
+                if !src.is_file() {
+                    continue;
+                }
+                let bytes = fs::read(&src).map_err(|e| HostError::io(&src, e))?;
+                let dst = src.with_file_name(format!("{to}.{ext}"));
+                atomic::write_file(&dst, &bytes)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Remove the temp files of interrupted atomic writes in `dir`: hidden
+/// names ending in `.tmp` (`.NAME.XXXXXX.tmp`, as [`atomic`] names them).
+pub fn clean_stale_temps(dir: &Path) -> Result<usize, HostError> {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return Ok(0);
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        if name.starts_with('.') && name.ends_with(".tmp") && entry.path().is_file() {
+            fs::remove_file(entry.path()).map_err(|e| HostError::io(entry.path(), e))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fields() -> PairFields {
+        PairFields {
+            width: 2,
+            height: 1,
+            vcx: vec![1.0, 0.0],
+            vcy: vec![0.0, 2.0],
+            vdx: vec![0.5, 0.0],
+            vdy: vec![0.0, -1.0],
+            rep: vec![10, 20, 30, 40, 50, 60],
+        }
+    }
+
+    #[test]
+    fn variants_permute_the_representation() {
+        let f = fields();
+        let spec = |variant| OutputSpec {
+            variant,
+            ..OutputSpec::default()
+        };
+        assert_eq!(spec(Variant::Dc).image(&f), f.rep);
+        assert_eq!(spec(Variant::Dc0).image(&f), [10, 0, 30, 40, 0, 60]);
+        assert_eq!(spec(Variant::Cd).image(&f), [20, 10, 30, 50, 40, 60]);
+        assert_eq!(spec(Variant::Hsv).image(&f).len(), 6);
+        assert_eq!(f.field(Field::VR), (vec![1.5, 0.0], vec![0.0, 1.0]));
+    }
+
+    #[test]
+    fn npy_xy_round_trip_and_fields_parse() {
+        let bytes = encode_npy_xy(1, 2, &[1.0, 2.0], &[3.0, 4.0]);
+        assert_eq!(
+            decode_npy_xy(&bytes).unwrap(),
+            (1, 2, vec![1.0, 2.0], vec![3.0, 4.0])
+        );
+        assert_eq!(parse_fields("v_R,v_c,v_R"), Ok(vec![Field::VC, Field::VR]));
+        assert!(parse_fields("v_x").unwrap_err().contains("v_c, v_d or v_R"));
+    }
+
+    #[test]
+    fn y4m_conversion_hits_the_bt601_anchors() {
+        let frame = y4m_frame(&[0, 0, 0, 255, 255, 255, 255, 0, 0]);
+        assert_eq!(&frame[..6], b"FRAME\n");
+        assert_eq!(&frame[6..9], [16, 235, 82]);
+        assert_eq!(&frame[9..12], [128, 128, 90]);
+        assert_eq!(&frame[12..15], [128, 128, 240]);
+        assert_eq!(
+            y4m_header(4, 2, (25, 1)),
+            "YUV4MPEG2 W4 H2 F25:1 Ip A1:1 C444\n"
+        );
+    }
+}

@@ -1,0 +1,638 @@
+//! A frame sequence through the engine: every consecutive pair `(n, n+1)`
+//! gives result `n`, labelled with frame `n` (SPEC §5), computed on a pool
+//! of worker threads and delivered in frame order.
+//!
+//! One reader thread pulls frames from the [`FrameSource`] and hands out
+//! pairs; `threads` workers compute each pair and write its files (or
+//! encode its stream frame); this thread puts stream frames out in order
+//! and counts. At most `2 · threads` pairs are in flight (read but not yet
+//! delivered), so memory stays bounded whatever the sequence's length, and
+//! the output is the same for every thread count.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
+use std::sync::{Arc, Mutex};
+
+use fixed::types::{U16F16, U32F32};
+use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
+
+use crate::cli::values::{EngineKind, ScaleArg, TileSize};
+use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame, y4m_header};
+use crate::reference::{self, FloatParams, FloatScaling};
+use crate::sequence::{Frame, FrameSource};
+use crate::{Gray, HostError, fixed_engine};
+
+/// Set when the user asks the process to stop (Ctrl-C): no new pair is
+/// started, pairs in flight finish, and the run reports the interruption.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// The computation of one pair: engine and parameters, checked once.
+#[derive(Clone, Debug)]
+pub struct Compute {
+    engine: EngineKind,
+    scale: ScaleArg,
+    intensity_scale: IntensityScale,
+    lambda: f64,
+    tile: Option<TileSize>,
+    fixed: Option<(Params, Scaling)>,
+}
+
+impl Compute {
+    /// Check the parameters the way `reynoldsflow pair` does, naming the
+    /// flag at fault.
+    pub fn new(
+        engine: EngineKind,
+        scale: ScaleArg,
+        intensity_scale: IntensityScale,
+        lambda: f64,
+        tile: Option<TileSize>,
+    ) -> Result<Self, HostError> {
+        let mut compute = Self {
+            engine,
+            scale,
+            intensity_scale,
+            lambda,
+            tile,
+            fixed: None,
+        };
+        match engine {
+            EngineKind::Float => {
+                if tile.is_some() {
+                    return Err(HostError::invalid(
+                        "--tile",
+                        "only the fixed engine works in tiles; drop --tile or use --engine fixed",
+                    ));
+                }
+            }
+            EngineKind::Fixed => {
+                let lambda_q =
+                    U32F32::checked_from_num(lambda).ok_or_else(|| compute.lambda_range())?;
+                let params = Params {
+                    scale: intensity_scale,
+                    lambda: lambda_q,
+                };
+                // The parameters' integer bounds do not depend on the frame size.
+                match Config::new(1, 1, params) {
+                    Ok(_) => {}
+                    Err(CoreError::LambdaOutOfRange) => return Err(compute.lambda_range()),
+                    Err(e) => return Err(HostError::invalid("--intensity-scale", e.to_string())),
+                }
+                let scaling = match scale {
+                    ScaleArg::MinMax => Scaling::PerFrameMinMax,
+                    ScaleArg::Fixed { k_d, k_c } => Scaling::Fixed {
+                        k_d: core_gain("KD", k_d)?,
+                        k_c: core_gain("KC", k_c)?,
+                    },
+                };
+                compute.fixed = Some((params, scaling));
+            }
+        }
+        Ok(compute)
+    }
+
+    /// The engine.
+    pub fn engine(&self) -> EngineKind {
+        self.engine
+    }
+
+    /// One pair, exactly as `reynoldsflow pair` computes it.
+    pub fn pair(&self, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
+        if prev.size() != next.size() {
+            return Err(HostError::SizeMismatch {
+                prev: prev.size(),
+                next: next.size(),
+            });
+        }
+        match self.fixed {
+            None => {
+                let s = self.intensity_scale;
+                let params = FloatParams {
+                    intensity_scale: f64::from(s.num()) / f64::from(s.den()),
+                    lambda: self.lambda,
+                };
+                let flow = reference::compute(prev, next, &params)?;
+                let scaling = match self.scale {
+                    ScaleArg::MinMax => FloatScaling::PerFrameMinMax,
+                    ScaleArg::Fixed { k_d, k_c } => FloatScaling::Fixed { k_d, k_c },
+                };
+                let rep = reference::representation(&flow, prev, scaling);
+                Ok(PairFields {
+                    width: flow.width,
+                    height: flow.height,
+                    vcx: flow.vcx,
+                    vcy: flow.vcy,
+                    vdx: flow.vdx,
+                    vdy: flow.vdy,
+                    rep,
+                })
+            }
+            Some((params, scaling)) => {
+                let tile = self.tile.map(|t| (t.width, t.height));
+                // One worker per pair already keeps the cores busy: each pair on one
+                // thread, in the single-pass path (the same bytes as `compute_fixed`).
+                let out =
+                    fixed_engine::compute_fixed_parallel(prev, next, params, tile, scaling, 1)
+                        .map_err(|e| match e {
+                            HostError::Core(
+                                c @ (CoreError::TileOutOfFrame | CoreError::TileTooWide { .. }),
+                            ) => HostError::invalid("--tile", c.to_string()),
+                            e => e,
+                        })?;
+                Ok(PairFields {
+                    width: out.width,
+                    height: out.height,
+                    vcx: out.vcx,
+                    vcy: out.vcy,
+                    vdx: out.vdx,
+                    vdy: out.vdy,
+                    rep: out.rep,
+                })
+            }
+        }
+    }
+
+    /// The fixed engine's λ range at this intensity scale (as `pair` says it).
+    fn lambda_range(&self) -> HostError {
+        let s = f64::from(self.intensity_scale.num()) / f64::from(self.intensity_scale.den());
+        let low = (s * s / 262_144.0).max(0.5f64.powi(33));
+        let high = 16_384.0 * s * s;
+        HostError::invalid(
+            "--lambda",
+            format!(
+                "{} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
+                 use --engine float or another --intensity-scale",
+                self.lambda
+            ),
+        )
+    }
+}
+
+/// A gain as the core's Q16.16, rounded to nearest.
+fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
+    U16F16::checked_from_num(k).ok_or_else(|| {
+        HostError::invalid(
+            "--scale",
+            format!("{which} = {k} is beyond the fixed engine's range [0, 65536)"),
+        )
+    })
+}
+
+/// Where results go.
+pub enum Destination<'a> {
+    /// Files in a folder.
+    Dir(&'a DirWriter),
+    /// The `--variant` images as a stream, in frame order.
+    Stream {
+        /// Which image.
+        spec: &'a OutputSpec,
+        /// Raw RGB24 or Y4M.
+        format: StreamFormat,
+        /// Where (standard output).
+        writer: &'a mut (dyn Write + Send),
+    },
+}
+
+/// How a sequence is run.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Worker threads (at least 1).
+    pub threads: usize,
+    /// Repeat the last result for the last frame (N outputs for N frames).
+    pub keep_count: bool,
+    /// Read at most this many frames.
+    pub max_frames: Option<usize>,
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Summary {
+    /// Frames read.
+    pub frames: usize,
+    /// Results computed (`frames − 1`, or 0).
+    pub results: usize,
+    /// Results delivered, with the `--keep-count` repeat.
+    pub outputs: usize,
+    /// Frame size.
+    pub size: Option<(usize, usize)>,
+    /// The stream's reader closed it (broken pipe) before the end: the run
+    /// stopped there, without error.
+    pub stream_closed: bool,
+}
+
+/// A pair to compute.
+struct Job {
+    index: usize,
+    prev: Arc<Frame>,
+    next: Arc<Frame>,
+}
+
+enum Msg {
+    Done {
+        index: usize,
+        stem: String,
+        size: (usize, usize),
+        payload: Vec<u8>,
+    },
+    /// A pair failed: stop at once.
+    Failed(HostError),
+    /// The input failed (or the run was interrupted): the pairs read before
+    /// still complete, then the run fails.
+    InputFailed(HostError),
+    End {
+        frames: usize,
+        last_stem: Option<String>,
+        size: Option<(usize, usize)>,
+    },
+}
+
+fn interrupted() -> HostError {
+    HostError::io(
+        "interrupted",
+        std::io::Error::new(
+            std::io::ErrorKind::Interrupted,
+            "stopped on request; every file written so far is complete",
+        ),
+    )
+}
+
+/// Run `source` through `compute` into `dest`; `on_output` is called once
+/// per delivered result, in order. Stops at the first error (files already
+/// written stay: each is complete).
+pub fn process(
+    source: &mut dyn FrameSource,
+    compute: &Compute,
+    dest: Destination<'_>,
+    options: Options,
+    on_output: &mut dyn FnMut(),
+) -> Result<Summary, HostError> {
+    let threads = options.threads.max(1);
+    let in_flight = 2 * threads;
+    let fps = source.frame_rate().unwrap_or((25, 1));
+    let stop = AtomicBool::new(false);
+    let (job_tx, job_rx) = mpsc::sync_channel::<Job>(threads);
+    let job_rx = Mutex::new(job_rx);
+    let (msg_tx, msg_rx) = mpsc::channel::<Msg>();
+    let (token_tx, token_rx) = mpsc::sync_channel::<()>(in_flight);
+    for _ in 0..in_flight {
+        token_tx.send(()).expect("the receiver is alive");
+    }
+    let (dir, mut stream) = match dest {
+        Destination::Dir(d) => (Some(d), None),
+        Destination::Stream {
+            spec,
+            format,
+            writer,
+        } => (None, Some((spec, format, writer))),
+    };
+    let stream_spec = stream.as_ref().map(|(spec, format, _)| (*spec, *format));
+
+    std::thread::scope(|scope| {
+        let reader_tx = msg_tx.clone();
+        let stop = &stop;
+        scope.spawn(move || {
+            read_pairs(
+                source,
+                options.max_frames,
+                job_tx,
+                token_rx,
+                reader_tx,
+                stop,
+            )
+        });
+        for _ in 0..threads {
+            let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
+            scope.spawn(move || {
+                loop {
+                    // The lock is held only while waiting for the next job.
+                    let Ok(job) = job_rx.lock().expect("no worker panics holding it").recv() else {
+                        return;
+                    };
+                    if stop.load(Ordering::SeqCst) {
+                        continue;
+                    }
+                    // A panic must not leave the others waiting for this pair.
+                    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        work(&job, compute, dir, stream_spec)
+                    }))
+                    .unwrap_or_else(|_| {
+                        Err(HostError::invalid(
+                            format!("frame {}", job.prev.stem),
+                            "internal error (panic) while computing this pair",
+                        ))
+                    });
+                    let msg = match result {
+                        Ok(payload) => Msg::Done {
+                            index: job.index,
+                            stem: job.prev.stem.clone(),
+                            size: job.prev.gray.size(),
+                            payload,
+                        },
+                        Err(e) => Msg::Failed(e),
+                    };
+                    if msg_tx.send(msg).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        drop(msg_tx);
+        collect(
+            msg_rx,
+            Some(token_tx),
+            stop,
+            dir,
+            stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
+            fps,
+            options.keep_count,
+            on_output,
+        )
+    })
+}
+
+/// The reader: frames in, pairs out, one token per pair in flight.
+fn read_pairs(
+    source: &mut dyn FrameSource,
+    max_frames: Option<usize>,
+    jobs: SyncSender<Job>,
+    tokens: Receiver<()>,
+    msgs: Sender<Msg>,
+    stop: &AtomicBool,
+) {
+    let mut prev: Option<Arc<Frame>> = None;
+    let mut frames = 0;
+    loop {
+        if stop.load(Ordering::SeqCst) {
+            return;
+        }
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            let _ = msgs.send(Msg::InputFailed(interrupted()));
+            return;
+        }
+        if max_frames.is_some_and(|m| frames >= m) {
+            break;
+        }
+        let frame = match source.next_frame() {
+            Ok(Some(frame)) => Arc::new(frame),
+            Ok(None) => break,
+            Err(e) => {
+                let _ = msgs.send(Msg::InputFailed(e));
+                return;
+            }
+        };
+        frames += 1;
+        if let Some(prev) = prev.replace(Arc::clone(&frame)) {
+            // Wait for room; a closed token channel means the run is stopping.
+            if tokens.recv().is_err() {
+                return;
+            }
+            let job = Job {
+                index: frames - 2,
+                prev,
+                next: frame,
+            };
+            if jobs.send(job).is_err() {
+                return;
+            }
+        }
+    }
+    let _ = msgs.send(Msg::End {
+        frames,
+        last_stem: prev.as_ref().map(|f| f.stem.clone()),
+        size: prev.as_ref().map(|f| f.gray.size()),
+    });
+}
+
+/// A worker's part: compute, then write the files or encode the stream frame.
+fn work(
+    job: &Job,
+    compute: &Compute,
+    dir: Option<&DirWriter>,
+    stream: Option<(&OutputSpec, StreamFormat)>,
+) -> Result<Vec<u8>, HostError> {
+    let fields = compute.pair(&job.prev.gray, &job.next.gray)?;
+    if let Some(dir) = dir {
+        dir.write(&job.prev.stem, &fields)?;
+    }
+    Ok(match stream {
+        Some((spec, StreamFormat::Rgb24)) => spec.image(&fields),
+        Some((spec, StreamFormat::Y4m)) => y4m_frame(&spec.image(&fields)),
+        None => Vec::new(),
+    })
+}
+
+/// A computed result waiting for its turn: stem, frame size, stream bytes.
+type Delivery = (String, (usize, usize), Vec<u8>);
+
+/// This thread's part: results in frame order, the stream, the count.
+#[allow(clippy::too_many_arguments)]
+fn collect<'w, 'o>(
+    msgs: Receiver<Msg>,
+    mut tokens: Option<SyncSender<()>>,
+    stop: &AtomicBool,
+    dir: Option<&DirWriter>,
+    mut stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
+    fps: (u32, u32),
+    keep_count: bool,
+    on_output: &mut dyn FnMut(),
+) -> Result<Summary, HostError> {
+    let mut pending: BTreeMap<usize, Delivery> = BTreeMap::new();
+    let mut next = 0;
+    let mut error: Option<HostError> = None;
+    let mut input_error: Option<HostError> = None;
+    let mut end = None;
+    let mut last: Option<(String, Vec<u8>)> = None;
+    let mut header_written = false;
+    let mut closed = false;
+    let stdout_error = |e: std::io::Error| HostError::io("stdout", e);
+    for msg in msgs {
+        match msg {
+            Msg::Done {
+                index,
+                stem,
+                size,
+                payload,
+            } => {
+                pending.insert(index, (stem, size, payload));
+            }
+            Msg::Failed(e) => {
+                stop.store(true, Ordering::SeqCst);
+                tokens = None; // unblocks the reader
+                error.get_or_insert(e);
+            }
+            Msg::InputFailed(e) => input_error = Some(e),
+            Msg::End {
+                frames,
+                last_stem,
+                size,
+            } => end = Some((frames, last_stem, size)),
+        }
+        if error.is_some() || closed {
+            continue;
+        }
+        while let Some((stem, size, payload)) = pending.remove(&next) {
+            if let Some((format, w)) = stream.as_mut() {
+                let written = (|| {
+                    if *format == StreamFormat::Y4m && !header_written {
+                        w.write_all(y4m_header(size.0, size.1, fps).as_bytes())?;
+                        header_written = true;
+                    }
+                    w.write_all(&payload)?;
+                    w.flush()
+                })();
+                if let Err(e) = written {
+                    stop.store(true, Ordering::SeqCst);
+                    tokens = None;
+                    if e.kind() == std::io::ErrorKind::BrokenPipe {
+                        closed = true;
+                    } else {
+                        error = Some(stdout_error(e));
+                    }
+                    break;
+                }
+            }
+            on_output();
+            last = Some((stem, payload));
+            next += 1;
+            if let Some(t) = &tokens {
+                let _ = t.send(());
+            }
+        }
+    }
+    if let Some(e) = error.or(input_error) {
+        return Err(e);
+    }
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(interrupted());
+    }
+    if closed {
+        return Ok(Summary {
+            outputs: next,
+            results: next,
+            stream_closed: true,
+            ..Summary::default()
+        });
+    }
+    let (frames, last_stem, size) = end.expect("the reader ends with End or Failed");
+    let mut summary = Summary {
+        frames,
+        results: next,
+        outputs: next,
+        size,
+        stream_closed: false,
+    };
+    if keep_count && let (Some((from, payload)), Some(to)) = (last, last_stem) {
+        if let Some(dir) = dir {
+            dir.repeat(&from, &to)?;
+        }
+        if let Some((_, w)) = stream.as_mut() {
+            w.write_all(&payload)
+                .and_then(|()| w.flush())
+                .map_err(stdout_error)?;
+        }
+        on_output();
+        summary.outputs += 1;
+    }
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sequence::index_stem;
+
+    /// `n` small moving frames, then an error if `fail`.
+    struct Frames {
+        next: usize,
+        n: usize,
+        fail: bool,
+    }
+
+    impl FrameSource for Frames {
+        fn next_frame(&mut self) -> Result<Option<Frame>, HostError> {
+            if self.next == self.n {
+                return match self.fail {
+                    true => Err(HostError::invalid("source", "broken on purpose")),
+                    false => Ok(None),
+                };
+            }
+            let t = self.next;
+            self.next += 1;
+            let pixels = (0..24 * 16)
+                .map(|i| (((i % 24 + 2 * t) * 37 + (i / 24) * 11) % 251) as u8)
+                .collect();
+            Ok(Some(Frame {
+                gray: Gray::new(24, 16, pixels).unwrap(),
+                stem: index_stem(t),
+            }))
+        }
+    }
+
+    fn stream(
+        n: usize,
+        fail: bool,
+        threads: usize,
+        keep_count: bool,
+    ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
+        let compute = Compute::new(
+            EngineKind::Fixed,
+            ScaleArg::MinMax,
+            IntensityScale::PER_255,
+            1e-4,
+            None,
+        )
+        .unwrap();
+        let spec = OutputSpec::default();
+        let mut bytes = Vec::new();
+        let mut calls = 0;
+        let result = process(
+            &mut Frames { next: 0, n, fail },
+            &compute,
+            Destination::Stream {
+                spec: &spec,
+                format: StreamFormat::Rgb24,
+                writer: &mut bytes,
+            },
+            Options {
+                threads,
+                keep_count,
+                max_frames: None,
+            },
+            &mut || calls += 1,
+        );
+        (result, bytes, calls)
+    }
+
+    #[test]
+    fn results_come_in_frame_order_whatever_the_thread_count() {
+        let frame = 3 * 24 * 16;
+        let (one, bytes_one, calls) = stream(9, false, 1, false);
+        let one = one.unwrap();
+        assert_eq!((one.frames, one.results, one.outputs, calls), (9, 8, 8, 8));
+        assert_eq!(bytes_one.len(), 8 * frame);
+        for threads in [2, 3, 8] {
+            let (_, bytes, _) = stream(9, false, threads, false);
+            assert!(bytes == bytes_one, "{threads} threads");
+        }
+        let (kept, bytes, _) = stream(9, false, 3, true);
+        assert_eq!(kept.unwrap().outputs, 9);
+        assert_eq!(bytes[..8 * frame], bytes_one[..]);
+        assert_eq!(bytes[8 * frame..], bytes_one[7 * frame..]);
+    }
+
+    #[test]
+    fn an_input_error_comes_after_the_pairs_read_before_it() {
+        let (result, bytes, calls) = stream(5, true, 2, false);
+        assert!(
+            result
+                .unwrap_err()
+                .to_string()
+                .contains("broken on purpose")
+        );
+        assert_eq!((bytes.len(), calls), (4 * 3 * 24 * 16, 4));
+        let (single, bytes, _) = stream(1, false, 2, true);
+        assert_eq!(single.unwrap().results, 0);
+        assert!(bytes.is_empty());
+    }
+}

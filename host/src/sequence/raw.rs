@@ -1,0 +1,111 @@
+//! Raw 8-bit gray frames back to back (`--raw WxH`): `W·H` bytes each, row
+//! major, from standard input or a file. The input must end on a frame
+//! boundary.
+
+use std::io::Read;
+use std::path::PathBuf;
+
+use super::{Frame, FrameSource, index_stem, input_error, read_full};
+use crate::{Gray, HostError};
+
+/// Raw frames read from any reader.
+pub struct RawSource {
+    name: PathBuf,
+    reader: Box<dyn Read + Send>,
+    width: usize,
+    height: usize,
+    index: usize,
+    count_hint: Option<usize>,
+    done: bool,
+}
+
+impl RawSource {
+    /// Frames of `width × height` from `reader`, reported as `name`.
+    pub fn new(
+        name: PathBuf,
+        reader: Box<dyn Read + Send>,
+        width: usize,
+        height: usize,
+    ) -> Result<Self, HostError> {
+        if width == 0 || height == 0 || width.checked_mul(height).is_none_or(|n| n > 1 << 32) {
+            return Err(HostError::invalid(
+                "--raw",
+                format!("{width}x{height} is not a usable frame size"),
+            ));
+        }
+        Ok(Self {
+            name,
+            reader,
+            width,
+            height,
+            index: 0,
+            count_hint: None,
+            done: false,
+        })
+    }
+
+    /// The input's length in bytes, for the frame count hint.
+    pub fn set_total_bytes(&mut self, len: Option<u64>) {
+        let frame = (self.width * self.height) as u64;
+        self.count_hint = len.map(|l| (l / frame) as usize);
+    }
+}
+
+impl FrameSource for RawSource {
+    fn next_frame(&mut self) -> Result<Option<Frame>, HostError> {
+        if self.done {
+            return Ok(None);
+        }
+        let size = self.width * self.height;
+        let mut pixels = vec![0u8; size];
+        let got =
+            read_full(&mut *self.reader, &mut pixels).map_err(|e| HostError::io(&self.name, e))?;
+        if got == 0 {
+            self.done = true;
+            return Ok(None);
+        }
+        if got < size {
+            self.done = true;
+            return Err(input_error(
+                &self.name,
+                format!(
+                    "truncated: the input ends {got} bytes into frame {} (a {}x{} frame is {size} bytes; is --raw right?)",
+                    self.index, self.width, self.height
+                ),
+            ));
+        }
+        let index = self.index;
+        self.index += 1;
+        Ok(Some(Frame {
+            gray: Gray::new(self.width, self.height, pixels)?,
+            stem: index_stem(index),
+        }))
+    }
+
+    fn frame_count_hint(&self) -> Option<usize> {
+        self.count_hint
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn whole_frames_then_a_clear_truncation() {
+        let bytes: Vec<u8> = (0..14).collect();
+        let mut src =
+            RawSource::new("stdin".into(), Box::new(std::io::Cursor::new(bytes)), 3, 2).unwrap();
+        assert_eq!(
+            src.next_frame().unwrap().unwrap().gray.pixels,
+            [0, 1, 2, 3, 4, 5]
+        );
+        assert_eq!(src.next_frame().unwrap().unwrap().stem, "000001");
+        let err = src.next_frame().unwrap_err().to_string();
+        assert!(
+            err.starts_with("stdin: truncated: the input ends 2 bytes into frame 2"),
+            "{err}"
+        );
+        assert!(src.next_frame().unwrap().is_none());
+    }
+}

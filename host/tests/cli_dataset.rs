@@ -1,0 +1,301 @@
+//! `reynoldsflow dataset` end to end: the mirrored tree, bad files skipped
+//! and reported, and resuming after a crash or a kill with no partial file
+//! left behind.
+
+mod run_support;
+
+use std::ffi::OsStr;
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use run_support::*;
+
+const MARKER: &str = ".reynoldsflow-done";
+
+/// SRC: two Y4M videos (one nested), two frame folders (one nested in the
+/// other), files that are neither, and (with ffmpeg) an MP4.
+fn source_tree(root: &Path, with_ffmpeg: bool) {
+    let f: Vec<_> = (0..5).map(|t| moving_frame(32, 24, t)).collect();
+    fs::create_dir_all(root.join("a/b")).unwrap();
+    fs::write(root.join("a/b/clip.y4m"), y4m(&f, "420jpeg")).unwrap();
+    fs::write(root.join("a/short.y4m"), y4m(&f[..3], "444")).unwrap();
+    let seq = root.join("seq1");
+    fs::create_dir_all(seq.join("inner")).unwrap();
+    for (i, name) in ["img2.pgm", "img10.pgm", "img1.pgm"].iter().enumerate() {
+        fs::write(seq.join(name), pgm(&f[i])).unwrap();
+    }
+    fs::write(seq.join("labels.txt"), "walk\n").unwrap();
+    fs::write(seq.join("inner/x1.png"), png_gray(&f[3])).unwrap();
+    fs::write(seq.join("inner/x2.png"), png_gray(&f[4])).unwrap();
+    fs::write(root.join("README"), "not a video").unwrap();
+    if with_ffmpeg {
+        let frames = root.join(".frames");
+        write_pgms(&frames, &f);
+        ffmpeg_encode(
+            &frames,
+            &root.join("a/movie.mp4"),
+            &["-c:v", "mpeg4", "-q:v", "2"],
+        );
+        fs::remove_dir_all(frames).unwrap();
+    }
+}
+
+fn expected_tree(with_ffmpeg: bool) -> Vec<String> {
+    let mut files: Vec<String> = [
+        "a/b/clip/.reynoldsflow-done",
+        "a/b/clip/000000.png",
+        "a/b/clip/000001.png",
+        "a/b/clip/000002.png",
+        "a/b/clip/000003.png",
+        "a/short/.reynoldsflow-done",
+        "a/short/000000.png",
+        "a/short/000001.png",
+        "seq1/.reynoldsflow-done",
+        "seq1/img1.png",
+        "seq1/img2.png",
+        "seq1/inner/.reynoldsflow-done",
+        "seq1/inner/x1.png",
+    ]
+    .map(String::from)
+    .to_vec();
+    if with_ffmpeg {
+        files.extend(
+            [
+                "a/movie/.reynoldsflow-done",
+                "a/movie/000000.png",
+                "a/movie/000001.png",
+                "a/movie/000002.png",
+                "a/movie/000003.png",
+            ]
+            .map(String::from),
+        );
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn mirrors_videos_and_frame_folders_and_skips_finished_items() {
+    let ffmpeg = have_ffmpeg();
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    source_tree(&src, ffmpeg);
+    let err = ok(&run(&args!["dataset", src, dst, "--threads", "2"]));
+    let items = if ffmpeg { 5 } else { 4 };
+    assert!(
+        err.contains(&format!("{items} items: {items} done, 0 already finished")),
+        "{err}"
+    );
+    assert_eq!(tree(&dst), expected_tree(ffmpeg));
+    // Frame folders keep their stems; videos are numbered; same bytes as `run`.
+    let single = tmp.path().join("single");
+    ok(&run(&args!["run", src.join("seq1"), "--out", single]));
+    for stem in ["img1", "img2"] {
+        assert_eq!(
+            fs::read(dst.join(format!("seq1/{stem}.png"))).unwrap(),
+            fs::read(single.join(format!("{stem}.png"))).unwrap()
+        );
+    }
+    let marker = fs::read_to_string(dst.join("a/b/clip").join(MARKER)).unwrap();
+    assert!(
+        marker.contains("frames: 5") && marker.contains("results: 4"),
+        "{marker}"
+    );
+
+    // A rerun skips everything; other options redo everything; --force too.
+    let err = ok(&run(&args!["dataset", src, dst]));
+    assert!(
+        err.contains(&format!("0 done, {items} already finished (skipped)")),
+        "{err}"
+    );
+    let err = ok(&run(&args!["dataset", src, dst, "--keep-count"]));
+    assert!(err.contains(&format!("{items} done, 0 already")), "{err}");
+    assert!(
+        dst.join("seq1/img10.png").is_file(),
+        "--keep-count output for the last frame"
+    );
+    let err = ok(&run(&args!["dataset", src, dst, "--keep-count", "--force"]));
+    assert!(err.contains(&format!("{items} done")), "{err}");
+
+    // SRC a single video: DST/<stem>/.
+    let one = tmp.path().join("one");
+    ok(&run(&args!["dataset", src.join("a/short.y4m"), one]));
+    assert_eq!(
+        tree(&one),
+        [
+            "short/.reynoldsflow-done",
+            "short/000000.png",
+            "short/000001.png"
+        ]
+    );
+}
+
+#[test]
+fn a_bad_file_is_reported_and_skipped_and_the_exit_status_says_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    source_tree(&src, false);
+    let f: Vec<_> = (0..3).map(|t| moving_frame(32, 24, t)).collect();
+    let mut cut = y4m(&f, "mono");
+    cut.truncate(cut.len() - 10);
+    fs::write(src.join("a/cut.y4m"), cut).unwrap();
+    fs::write(src.join("a/deep.y4m"), b"YUV4MPEG2 W4 H4 C444p12\n").unwrap();
+    fs::create_dir(src.join("broken")).unwrap();
+    fs::write(src.join("broken/f1.png"), b"\x89PNG\r\n\x1a\ngarbage").unwrap();
+    fs::write(src.join("broken/f2.png"), png_gray(&f[0])).unwrap();
+    // A video and a frame folder that would share an output folder.
+    fs::write(src.join("seq1.y4m"), y4m(&f, "mono")).unwrap();
+    let res = run(&args!["dataset", src, dst]);
+    let err = stderr(&res);
+    println!("{err}");
+    assert_eq!(res.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("8 items: 4 done, 0 already finished (skipped), 4 failed"),
+        "{err}"
+    );
+    assert!(err.contains("cut.y4m: truncated: frame 2"), "{err}");
+    assert!(
+        err.contains("deep.y4m: colour space C444p12 has 12-bit samples"),
+        "{err}"
+    );
+    assert!(err.contains("f1.png: cannot decode"), "{err}");
+    assert!(
+        err.contains("seq1.y4m: its output folder") && err.contains("also the output of"),
+        "{err}"
+    );
+    assert!(
+        err.lines()
+            .last()
+            .unwrap()
+            .starts_with("reynoldsflow: error: dataset: 4 of 8 items failed"),
+        "{err}"
+    );
+    // The good items are complete; failed ones have no marker and no temp file.
+    for good in ["a/b/clip", "a/short", "seq1", "seq1/inner"] {
+        assert!(dst.join(good).join(MARKER).is_file(), "{good}");
+    }
+    assert!(!dst.join("a/cut").join(MARKER).exists());
+    assert!(temp_files(&dst).is_empty());
+}
+
+#[test]
+fn resumes_after_a_crash_mid_write_with_no_partial_file_left() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    source_tree(&src, false);
+    let reference = tmp.path().join("reference");
+    ok(&run(&args!["dataset", src, reference, "--threads", "1"]));
+
+    // Crash after 5 results: one item finished, one half done with a temp file.
+    let res = run_with(
+        &args!["dataset", src, dst, "--threads", "1"],
+        None,
+        &[("REYNOLDSFLOW_ABORT_AFTER", OsStr::new("5"))],
+    );
+    assert!(!res.status.success(), "{}", stderr(&res));
+    let leftovers = temp_files(&dst);
+    assert_eq!(leftovers.len(), 1, "{:?}", tree(&dst));
+    let markers = tree(&dst).iter().filter(|p| p.ends_with(MARKER)).count();
+    assert!((1..4).contains(&markers), "{:?}", tree(&dst));
+
+    let err = ok(&run(&args!["dataset", src, dst, "--threads", "1"]));
+    assert!(
+        err.contains(&format!("{markers} already finished (skipped)")),
+        "{err}"
+    );
+    assert!(temp_files(&dst).is_empty(), "{:?}", tree(&dst));
+    assert_eq!(tree(&dst), tree(&reference));
+    for file in tree(&dst).iter().filter(|f| f.ends_with(".png")) {
+        assert_eq!(
+            fs::read(dst.join(file)).unwrap(),
+            fs::read(reference.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+}
+
+#[test]
+fn resumes_after_being_killed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    // Enough work that the kill lands mid-run: 3 clips of 30 frames.
+    let f: Vec<_> = (0..30).map(|t| moving_frame(96, 64, t)).collect();
+    fs::create_dir(&src).unwrap();
+    for name in ["c1.y4m", "c2.y4m", "c3.y4m"] {
+        fs::write(src.join(name), y4m(&f, "420jpeg")).unwrap();
+    }
+    let mut child = Command::new(BIN)
+        .args([
+            OsStr::new("dataset"),
+            src.as_os_str(),
+            dst.as_os_str(),
+            OsStr::new("--threads"),
+            OsStr::new("1"),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let killed = loop {
+        if tree(&dst).iter().any(|p| p.ends_with(".png")) {
+            child.kill().unwrap();
+            break true;
+        }
+        if child.try_wait().unwrap().is_some() || started.elapsed() > Duration::from_secs(60) {
+            break false;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    child.wait().unwrap();
+    let done_at_kill = tree(&dst).iter().filter(|p| p.ends_with(MARKER)).count();
+    println!(
+        "killed mid-run: {killed}; items finished at the kill: {done_at_kill}; files: {}",
+        tree(&dst).len()
+    );
+    // Whatever the kill left, every PNG under its final name decodes whole.
+    for file in tree(&dst).iter().filter(|f| f.ends_with(".png")) {
+        rgb(&dst.join(file));
+    }
+    let err = ok(&run(&args!["dataset", src, dst]));
+    assert!(err.contains("3 items"), "{err}");
+    assert!(temp_files(&dst).is_empty(), "{:?}", tree(&dst));
+    for clip in ["c1", "c2", "c3"] {
+        let pngs = tree(&dst.join(clip))
+            .iter()
+            .filter(|f| f.ends_with(".png"))
+            .count();
+        assert_eq!(pngs, 29, "{clip}");
+        assert!(dst.join(clip).join(MARKER).is_file());
+    }
+}
+
+#[test]
+fn dataset_usage_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let empty = tmp.path().join("empty");
+    fs::create_dir(&empty).unwrap();
+    let res = run(&args!["dataset", empty, tmp.path().join("dst")]);
+    let err = stderr(&res);
+    assert_eq!(res.status.code(), Some(1));
+    assert!(
+        err.contains("empty: no videos or frame folders found"),
+        "{err}"
+    );
+    let res = run(&args![
+        "dataset",
+        tmp.path().join("missing"),
+        tmp.path().join("dst")
+    ]);
+    assert_eq!(res.status.code(), Some(1));
+    assert!(
+        stderr(&res).contains("missing: No such file"),
+        "{}",
+        stderr(&res)
+    );
+    let res = run(&args!["dataset", empty]);
+    assert_eq!(res.status.code(), Some(2));
+    assert!(stderr(&res).contains("DST"), "{}", stderr(&res));
+}
