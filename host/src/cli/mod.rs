@@ -18,6 +18,22 @@ pub mod values;
 
 const EXAMPLES: &str = "\
 Examples:
+  reynoldsflow run --out demo/
+      the built-in moving scene: demo/000000.png ...
+  reynoldsflow run clip.mp4 --out reps/ --keep-count
+      one representation per frame of a video, named after the frame
+  reynoldsflow dataset videos/ reps/
+      a whole tree of videos and frame folders, resumable
+  reynoldsflow pair f0.pgm f1.pgm --out out/
+      fixed-point core, per-frame min-max bytes: out/{vcx,vcy,vdx,vdy}.npy, out/rep.png
+  reynoldsflow budget --width 640 --height 480 --tile 80x480
+      working memory and halo overhead of an engine for that tiling
+  reynoldsflow eval --out eval/
+      controlled scenes with exact ground truth, baselines, plots";
+
+/// The examples of `pair`.
+const PAIR_EXAMPLES: &str = "\
+Examples:
   reynoldsflow pair f0.pgm f1.pgm --out out/
       fixed-point core, per-frame min-max bytes: out/{vcx,vcy,vdx,vdy}.npy, out/rep.png
   reynoldsflow pair a.png b.png --out ref/ --engine float --scale fixed:8,32
@@ -37,7 +53,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Fields and representation of one frame pair.
-    #[command(after_help = EXAMPLES)]
+    #[command(after_help = PAIR_EXAMPLES)]
     Pair(pair::PairArgs),
     /// Working memory and halo overhead of a tiling (for firmware budgets).
     Budget(budget::BudgetArgs),
