@@ -5,11 +5,11 @@
 
 /// `r0[k] ≈ 2³⁰ / √((k + ½) / 256)` for the top byte `k ∈ [64, 256)` of a
 /// normalised argument: a seed good to 8 bits (Q30, in `(2³⁰, 2³¹]`).
-const SEED: [u32; 192] = {
-    let mut table = [0u32; 192];
-    let mut k = 0;
-    while k < 192 {
-        let top = 2 * (k as u128 + 64) + 1;
+const SEED: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut k = 64;
+    while k < 256 {
+        let top = 2 * (k as u128) + 1;
         table[k] = ((1u128 << 69) / top).isqrt() as u32;
         k += 1;
     }
@@ -34,7 +34,7 @@ pub fn isqrt(n: u64) -> u32 {
     // r ≈ 2³⁰/√x in Q30 ∈ (2³⁰, 2³¹]. One Newton step r·(3 − x·r²)/2, all in
     // 32×32→64 products: r²/2³¹ ≤ 2³¹ (Q29), a·that/2³² ≈ x·r² ≤ 2³¹ (Q29),
     // r·(3·2²⁹ − t)/2³⁰ < 1.5·2³¹ < 2³². Each step squares the relative error.
-    let mut r = SEED[((a >> 24) as usize).saturating_sub(64) % 192];
+    let mut r = SEED[(a >> 24) as usize];
     for _ in 0..2 {
         let r2 = (mul(r, r) >> 31) as u32;
         let t = ((mul(a, r2) >> 32) as u32).min(3 << 29);

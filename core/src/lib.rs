@@ -70,7 +70,7 @@ pub use stream::RowStream;
 #[doc(hidden)]
 pub mod internals {
     pub use crate::isqrt::{isqrt, mul};
-    pub use crate::reciprocal::reciprocal;
+    pub use crate::reciprocal::{reciprocal, reciprocal_by_newton};
     pub use crate::solve::{StructureSums, curl_free_q32, divergence_free_q32, magnitude_q32, q16};
     pub use crate::stages::{
         Products, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,

@@ -35,7 +35,7 @@ fn signed(negative: bool, mag: u64) -> i64 {
 #[inline(always)]
 pub fn q16(v: i64) -> i32 {
     let mag = (v.unsigned_abs().min(FIELD_MAX_Q32) + (1 << 15)) >> 16;
-    if v < 0 { -(mag as i32) } else { mag as i32 }
+    core::hint::select_unpredictable(v < 0, -(mag as i32), mag as i32)
 }
 
 /// `v_c` in Q32.32 from `V` (units `s/768`, `|V| ≤ 1.02e7 < 2²⁴`):
@@ -48,7 +48,7 @@ pub fn curl_free_q32(config: &Config, v: i32) -> i64 {
     let mag = mul(v.unsigned_abs(), config.c_mant);
     let shift = config.c_exp - 16;
     let mag = ((mag + (1 << (shift - 1))) >> shift) as i64;
-    if v < 0 { -mag } else { mag }
+    core::hint::select_unpredictable(v < 0, -mag, mag)
 }
 
 /// The structure sums of one pixel (SPEC §3 step 8), as exact integers:
@@ -106,11 +106,8 @@ pub fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2] {
     let ny = scaled(a8, q) - b8 * p;
 
     let e = u64::BITS - det.leading_zeros();
-    let d32 = if e > 32 {
-        det >> (e - 32)
-    } else {
-        det << (32 - e)
-    };
+    // det's top 32 bits (`det >> (e − 32)` or `det << (32 − e)`), without a branch.
+    let d32 = (det << det.leading_zeros()) >> 32;
     let r = reciprocal(d32 as u32) as u32;
     // v = prod · 2^k in Q32.32, k = (bits − 31) + sp + 4 − e − c_exp + 16.
     let base = sp as i32 + 20 - e as i32 - config.c_exp as i32;
@@ -120,11 +117,8 @@ pub fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2] {
             return 0;
         }
         let bits = (u64::BITS - mag.leading_zeros()) as i32;
-        let n31 = if bits >= 31 {
-            mag >> (bits - 31)
-        } else {
-            mag << (31 - bits)
-        };
+        // `mag >> (bits − 31)` or `mag << (31 − bits)`, without a branch.
+        let n31 = (mag << mag.leading_zeros()) >> 33;
         let m1 = (mul(n31 as u32, r) >> 32) as u32;
         let prod = mul(m1, config.c_mant);
         let k = base + bits - 31;

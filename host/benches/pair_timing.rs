@@ -1,0 +1,247 @@
+//! Milliseconds per frame pair of the fixed engine, for side-by-side runs
+//! against other programs (`scripts/bench-vs-opencv`): loads two PGM
+//! frames once, warms up, then times `--iters` computations (or as many as
+//! fit in `--seconds`) and prints one JSON line with every time in ms.
+//! Only the computation is timed, never file I/O.
+//!
+//! ```text
+//! pair_timing --prev A.pgm --next B.pgm --mode MODE [--threads N]
+//!             [--seconds S] [--min-iters N] [--warmup N]
+//! ```
+//! Modes:
+//! - `serial`: the core's `represent`, `Engine<142>` in 128-px strips,
+//!   `Fixed` gains (one engine pass, as when streaming), one thread;
+//! - `serial-minmax`: the same with per-frame min–max (two engine passes);
+//! - `parallel`: the host's `compute_fixed_parallel` on `--threads`
+//!   threads (rayon tiles, per-frame min–max in one pass, f64 planes out;
+//!   it builds its rayon pool on every call);
+//! - `parallel-core`: the core alone over a rayon pool of `--threads` built
+//!   once: the 128-px strips spread over the threads, one engine each,
+//!   RGB bytes with `Fixed` gains straight from the engine's rows into the
+//!   frame (one pass, no f64 planes): what the parallel path costs without
+//!   the host's output planes.
+//!
+//! Without `--prev` (e.g. under `cargo bench`), it times the built-in
+//! textured pair at 640×480 in every mode.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use reynoldsflow_core::fixed::types::U16F16;
+use reynoldsflow_core::{
+    ByteScale, Config, Engine, FlowPixel, FramePair, Params, Plan, Scaling, Sink, represent, rgb,
+};
+use reynoldsflow_host::Gray;
+use reynoldsflow_host::fixed_engine::compute_fixed_parallel;
+
+mod common;
+use common::{COLS, moving_pair, read_pgm};
+
+const FIXED: Scaling = Scaling::Fixed {
+    k_d: U16F16::lit("8"),
+    k_c: U16F16::lit("8"),
+};
+
+struct Options {
+    prev: Option<String>,
+    next: Option<String>,
+    mode: String,
+    threads: usize,
+    seconds: f64,
+    min_iters: usize,
+    warmup: usize,
+}
+
+fn options() -> Options {
+    let mut o = Options {
+        prev: None,
+        next: None,
+        mode: "serial".into(),
+        threads: 1,
+        seconds: 1.0,
+        min_iters: 10,
+        warmup: 3,
+    };
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        let mut value = || args.next().unwrap_or_else(|| panic!("{arg} needs a value"));
+        match arg.as_str() {
+            "--prev" => o.prev = Some(value()),
+            "--next" => o.next = Some(value()),
+            "--mode" => o.mode = value(),
+            "--threads" => o.threads = value().parse().expect("--threads"),
+            "--seconds" => o.seconds = value().parse().expect("--seconds"),
+            "--min-iters" => o.min_iters = value().parse().expect("--min-iters"),
+            "--warmup" => o.warmup = value().parse().expect("--warmup"),
+            // Flags cargo bench passes to every bench binary (`--bench`, `--quick`, …).
+            _ => {}
+        }
+    }
+    o
+}
+
+/// One computation of the pair in `mode`.
+fn computation(
+    mode: &str,
+    threads: usize,
+    (w, h): (usize, usize),
+    prev: &[u8],
+    next: &[u8],
+) -> Box<dyn FnMut()> {
+    let config = Config::new(w, h, Params::DEFAULT).unwrap();
+    let (prev, next) = (prev.to_vec(), next.to_vec());
+    match mode {
+        "serial" | "serial-minmax" => {
+            let scaling = if mode == "serial" {
+                FIXED
+            } else {
+                Scaling::PerFrameMinMax
+            };
+            let plan = Plan::<COLS>::strips(config).unwrap();
+            let mut engine = Box::new(Engine::<COLS>::new());
+            let mut rgb = vec![0u8; 3 * w * h];
+            Box::new(move || {
+                let frames = FramePair::packed(&config, &prev, &next).unwrap();
+                represent(
+                    &mut engine,
+                    &plan,
+                    &frames,
+                    scaling,
+                    black_box(&mut rgb),
+                    (),
+                )
+                .unwrap();
+            })
+        }
+        "parallel" => {
+            let prev = Gray::new(w, h, prev).unwrap();
+            let next = Gray::new(w, h, next).unwrap();
+            Box::new(move || {
+                let out = compute_fixed_parallel(
+                    &prev,
+                    &next,
+                    Params::DEFAULT,
+                    None,
+                    Scaling::PerFrameMinMax,
+                    threads,
+                )
+                .unwrap();
+                black_box(out);
+            })
+        }
+        "parallel-core" => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads.max(1))
+                .build()
+                .unwrap();
+            let plan = Plan::<COLS>::strips(config).unwrap();
+            let mut rgb = vec![0u8; 3 * w * h];
+            Box::new(move || {
+                let frames = FramePair::packed(&config, &prev, &next).unwrap();
+                // Each strip owns its columns of every row: hand each one its
+                // row segments of the frame, so the strips write in parallel.
+                let mut strips: Vec<Vec<&mut [u8]>> =
+                    (0..plan.tile_count()).map(|_| Vec::new()).collect();
+                for row in rgb.chunks_mut(3 * w) {
+                    let mut rest = row;
+                    for strip in strips.iter_mut() {
+                        let take = (3 * plan.tile_width()).min(rest.len());
+                        let (segment, tail) = rest.split_at_mut(take);
+                        strip.push(segment);
+                        rest = tail;
+                    }
+                }
+                pool.install(|| {
+                    strips.par_iter_mut().enumerate().for_each_init(
+                        || Box::new(Engine::<COLS>::new()),
+                        |engine, (index, rows)| {
+                            let mut sink = StripRgb {
+                                rows,
+                                scale: ByteScale::fixed(U16F16::lit("8")),
+                            };
+                            engine.run_tile(&plan, &frames, index, &mut sink).unwrap();
+                        },
+                    )
+                });
+                black_box(&mut rgb);
+            })
+        }
+        other => panic!("unknown --mode {other} (serial, serial-minmax, parallel, parallel-core)"),
+    }
+}
+
+/// One strip's segments of the frame's RGB rows.
+struct StripRgb<'a, 'b> {
+    rows: &'a mut [&'b mut [u8]],
+    scale: ByteScale,
+}
+
+impl Sink for StripRgb<'_, '_> {
+    fn row(&mut self, y: usize, _x: usize, pixels: &[FlowPixel]) {
+        for (dst, px) in self.rows[y].chunks_exact_mut(3).zip(pixels) {
+            dst.copy_from_slice(&rgb(px, &self.scale, &self.scale));
+        }
+    }
+}
+
+/// Times in ms of at least `min_iters` runs and at least `seconds` in all.
+fn time(run: &mut dyn FnMut(), warmup: usize, min_iters: usize, seconds: f64) -> Vec<f64> {
+    for _ in 0..warmup {
+        run();
+    }
+    let start = Instant::now();
+    let mut times = Vec::new();
+    while times.len() < min_iters || start.elapsed().as_secs_f64() < seconds {
+        let t = Instant::now();
+        run();
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    times
+}
+
+fn median(times: &[f64]) -> f64 {
+    let mut sorted = times.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted[sorted.len() / 2]
+}
+
+fn main() {
+    let o = options();
+    match (&o.prev, &o.next) {
+        (Some(prev), Some(next)) => {
+            let (w, h, p) = read_pgm(prev);
+            let (w2, h2, n) = read_pgm(next);
+            assert_eq!((w, h), (w2, h2), "frames differ in size");
+            let mut run = computation(&o.mode, o.threads, (w, h), &p, &n);
+            let times = time(&mut *run, o.warmup, o.min_iters, o.seconds);
+            let list: Vec<String> = times.iter().map(|t| format!("{t:.4}")).collect();
+            println!(
+                "{{\"mode\":\"{}\",\"threads\":{},\"width\":{w},\"height\":{h},\"ms\":[{}]}}",
+                o.mode,
+                o.threads,
+                list.join(",")
+            );
+        }
+        _ => {
+            let (w, h) = (640, 480);
+            let (p, n) = moving_pair(w, h);
+            for (mode, threads) in [
+                ("serial", 1),
+                ("serial-minmax", 1),
+                ("parallel", 1),
+                ("parallel", 2),
+                ("parallel-core", 1),
+                ("parallel-core", 2),
+            ] {
+                let mut run = computation(mode, threads, (w, h), &p, &n);
+                let times = time(&mut *run, 2, 5, 0.5);
+                println!(
+                    "pair_timing {w}x{h} {mode:>13} {threads}t: {:8.3} ms/pair (median of {})",
+                    median(&times),
+                    times.len()
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,121 @@
+//! Throughput of the whole representation `F_R` of a textured moving pair
+//! at 160×120, 320×240, 640×480 and 1280×720:
+//! - `core/strips`: the fixed engine (`Engine<142>`, full-height 128-px
+//!   strips) through `represent`, `Fixed` gains (one engine pass, as when
+//!   streaming), one thread;
+//! - `core/strips-minmax`: the same with per-frame min–max (two passes);
+//! - `core/tiles-64x64`: an `Engine<78>` over 64×64 tiles, `Fixed`;
+//! - `host/parallel-1t`, `host/parallel-2t`: `compute_fixed_parallel`
+//!   (rayon tiles, per-frame min–max in one pass, f64 planes out) on 1
+//!   and 2 threads;
+//! - `float/reference`: the float64 reference, `compute` + `representation`.
+//!
+//! `cargo bench -p reynoldsflow-host --bench representation [-- --quick]`
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use reynoldsflow_core::fixed::types::U16F16;
+use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
+use reynoldsflow_host::Gray;
+use reynoldsflow_host::fixed_engine::compute_fixed_parallel;
+use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
+
+mod common;
+use common::{COLS, SIZES, moving_pair};
+
+const FIXED: Scaling = Scaling::Fixed {
+    k_d: U16F16::lit("8"),
+    k_c: U16F16::lit("8"),
+};
+
+/// The core's `represent` with an engine of `N` columns over `tile` tiles.
+fn core_engine<const N: usize>(
+    prev: &[u8],
+    next: &[u8],
+    (w, h): (usize, usize),
+    tile: Option<(usize, usize)>,
+    scaling: Scaling,
+) -> impl FnMut() {
+    let config = Config::new(w, h, Params::DEFAULT).unwrap();
+    let plan = match tile {
+        None => Plan::<N>::strips(config).unwrap(),
+        Some((tw, th)) => Plan::<N>::new(config, tw, th).unwrap(),
+    };
+    let (prev, next) = (prev.to_vec(), next.to_vec());
+    let mut engine = Box::new(Engine::<N>::new());
+    let mut rgb = vec![0u8; 3 * w * h];
+    move || {
+        let frames = FramePair::packed(&config, &prev, &next).unwrap();
+        represent(
+            &mut engine,
+            &plan,
+            &frames,
+            scaling,
+            black_box(&mut rgb),
+            (),
+        )
+        .unwrap();
+    }
+}
+
+fn representation_benches(c: &mut Criterion) {
+    for (w, h) in SIZES {
+        let (prev, next) = moving_pair(w, h);
+        let (gprev, gnext) = (
+            Gray::new(w, h, prev.clone()).unwrap(),
+            Gray::new(w, h, next.clone()).unwrap(),
+        );
+        let mut group = c.benchmark_group(format!("representation/{w}x{h}"));
+        group.throughput(Throughput::Elements((w * h) as u64));
+        if w * h > 320 * 240 {
+            group.sample_size(10);
+        }
+        let mut run = core_engine::<COLS>(&prev, &next, (w, h), None, FIXED);
+        group.bench_function(BenchmarkId::from_parameter("core/strips"), |b| {
+            b.iter(&mut run)
+        });
+        let mut run = core_engine::<COLS>(&prev, &next, (w, h), None, Scaling::PerFrameMinMax);
+        group.bench_function(BenchmarkId::from_parameter("core/strips-minmax"), |b| {
+            b.iter(&mut run)
+        });
+        let mut run = core_engine::<78>(&prev, &next, (w, h), Some((64, 64)), FIXED);
+        group.bench_function(BenchmarkId::from_parameter("core/tiles-64x64"), |b| {
+            b.iter(&mut run)
+        });
+        for threads in [1, 2] {
+            let id = format!("host/parallel-{threads}t");
+            group.bench_function(BenchmarkId::from_parameter(id), |b| {
+                b.iter(|| {
+                    compute_fixed_parallel(
+                        &gprev,
+                        &gnext,
+                        Params::DEFAULT,
+                        None,
+                        Scaling::PerFrameMinMax,
+                        threads,
+                    )
+                    .unwrap()
+                })
+            });
+        }
+        group.bench_function(BenchmarkId::from_parameter("float/reference"), |b| {
+            b.iter(|| {
+                let flow = compute(&gprev, &gnext, &FloatParams::default()).unwrap();
+                representation(&flow, &gprev, FloatScaling::PerFrameMinMax)
+            })
+        });
+        group.finish();
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(15)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    targets = representation_benches
+}
+criterion_main!(benches);

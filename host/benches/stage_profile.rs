@@ -1,0 +1,168 @@
+//! Each stage of the fixed engine apart, for profilers and for A/B builds
+//! (`scripts/profile-stages`): records the real inputs of every stage for a
+//! textured moving pair (checked against the engine), then runs each stage
+//! over every call the host engine makes for the frame, in its own
+//! never-inlined function (`common::run_*`), and the whole engine once
+//! (`engine_pass`: `represent`, `Fixed` gains, one pass).
+//!
+//! ```text
+//! stage_profile [--size WxH] [--reps N]   # once each: run under callgrind
+//! stage_profile --time [--size WxH]       # ns/px per stage, JSON lines
+//! stage_profile --only NAME [--reps N]    # one stage (or `engine`), for perf stat
+//! stage_profile --digest                  # hash of every output, all sizes
+//! ```
+//! `--digest` prints an FNV-1a hash of every `FlowPixel` and of the
+//! min–max representation of the textured pair at each bench size: two
+//! builds (e.g. before and after an optimisation of the core) must print
+//! the same lines.
+//! Under callgrind, each `run_*` function's inclusive instruction count
+//! divided by `reps · W · H` is the stage's instructions per pixel.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use reynoldsflow_core::fixed::types::U16F16;
+use reynoldsflow_core::{
+    Config, Engine, FlowPixel, FramePair, Params, Plan, Scaling, Sink, represent,
+};
+
+mod common;
+use common::{COLS, SIZES, Scratch, Stage, Strip, moving_pair};
+
+const FIXED: Scaling = Scaling::Fixed {
+    k_d: U16F16::lit("8"),
+    k_c: U16F16::lit("8"),
+};
+
+/// The whole engine over the frame: `represent`, `Fixed` gains (one pass),
+/// strips of the host engine.
+#[inline(never)]
+fn engine_pass(
+    engine: &mut Engine<COLS>,
+    plan: &Plan<COLS>,
+    frames: &FramePair<'_>,
+    rgb: &mut [u8],
+) {
+    represent(engine, plan, frames, FIXED, rgb, ()).unwrap();
+}
+
+/// FNV-1a over every field of every pixel, in the order the sink sees them.
+struct Digest(u64);
+
+impl Digest {
+    fn eat(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+impl Sink for Digest {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        self.eat(&(y as u64).to_le_bytes());
+        self.eat(&(x as u64).to_le_bytes());
+        for px in pixels {
+            for v in px.v_c.iter().chain(&px.v_d) {
+                self.eat(&v.to_bits().to_le_bytes());
+            }
+            self.eat(&px.m_c.to_bits().to_le_bytes());
+            self.eat(&px.m_d.to_bits().to_le_bytes());
+            self.eat(&[px.luma]);
+        }
+    }
+}
+
+/// Hashes of the outputs at every bench size.
+fn digests() {
+    for (w, h) in SIZES {
+        let (prev, next) = moving_pair(w, h);
+        let config = Config::new(w, h, Params::DEFAULT).unwrap();
+        let plan = Plan::<COLS>::strips(config).unwrap();
+        let frames = FramePair::packed(&config, &prev, &next).unwrap();
+        let mut engine = Box::new(Engine::<COLS>::new());
+        let mut pixels = Digest(0xcbf2_9ce4_8422_2325);
+        let mut rgb = vec![0u8; 3 * w * h];
+        let scaling = Scaling::PerFrameMinMax;
+        represent(&mut engine, &plan, &frames, scaling, &mut rgb, &mut pixels).unwrap();
+        let mut bytes = Digest(0xcbf2_9ce4_8422_2325);
+        bytes.eat(&rgb);
+        println!(
+            "{w}x{h}: pixels {:016x}, min-max RGB {:016x}",
+            pixels.0, bytes.0
+        );
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let (mut w, mut h, mut reps, mut timing) = (640usize, 480usize, 1usize, false);
+    let mut only: Option<String> = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--size" => {
+                let s = args.next().expect("--size WxH");
+                let (a, b) = s.split_once('x').expect("--size WxH");
+                (w, h) = (a.parse().expect("width"), b.parse().expect("height"));
+            }
+            "--reps" => reps = args.next().and_then(|r| r.parse().ok()).expect("--reps N"),
+            "--time" => timing = true,
+            "--only" => only = Some(args.next().expect("--only NAME")),
+            "--digest" => return digests(),
+            _ => {} // cargo bench's own flags
+        }
+    }
+    let (prev, next) = moving_pair(w, h);
+    let strip = Strip::record(w, h, &prev, &next);
+    let tiles = strip.tiles();
+    let mut scratch = Scratch::new();
+    let config = Config::new(w, h, Params::DEFAULT).unwrap();
+    let plan = Plan::<COLS>::strips(config).unwrap();
+    let frames = FramePair::packed(&config, &prev, &next).unwrap();
+    let mut engine = Box::new(Engine::<COLS>::new());
+    let mut rgb = vec![0u8; 3 * w * h];
+    let px = (w * h) as f64;
+
+    if !timing {
+        let wanted = |name: &str| only.as_deref().is_none_or(|o| name.starts_with(o));
+        for _ in 0..reps {
+            for stage in Stage::ALL.into_iter().filter(|s| wanted(s.name())) {
+                stage.run(&strip, &tiles, &mut scratch);
+            }
+            if wanted("engine") {
+                engine_pass(&mut engine, &plan, &frames, &mut rgb);
+            }
+        }
+        black_box(&rgb);
+        println!("stage_profile {w}x{h}: {reps} rep(s) of every stage and one engine pass each");
+        return;
+    }
+
+    // Interleaved rounds, each stage timed over the whole frame; medians.
+    let rounds = 15;
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); Stage::ALL.len() + 1];
+    for _ in 0..rounds {
+        for (k, stage) in Stage::ALL.into_iter().enumerate() {
+            let t = Instant::now();
+            stage.run(&strip, &tiles, &mut scratch);
+            times[k].push(t.elapsed().as_secs_f64() * 1e9 / px);
+        }
+        let t = Instant::now();
+        engine_pass(&mut engine, &plan, &frames, &mut rgb);
+        times[Stage::ALL.len()].push(t.elapsed().as_secs_f64() * 1e9 / px);
+    }
+    let names = Stage::ALL
+        .iter()
+        .map(|s| s.name())
+        .chain(["engine (represent, Fixed)"]);
+    for (name, t) in names.zip(times) {
+        println!(
+            "{{\"size\":\"{w}x{h}\",\"stage\":\"{name}\",\"ns_per_px\":{:.4}}}",
+            median(t)
+        );
+    }
+}
