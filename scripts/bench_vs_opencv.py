@@ -16,7 +16,7 @@ Configurations:
              Engine<142> strips, one engine pass; and the two-pass per-frame
              min-max)
   all cores  DIS with OpenCV's default threads  vs  ours parallel
-             (`compute_fixed_parallel`, 2 threads)
+             (`represent_parallel`, 2 threads)
   scaling    ours parallel 1 thread vs 2 threads at 1280x720
 """
 

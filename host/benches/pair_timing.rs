@@ -12,14 +12,9 @@
 //! - `serial`: the core's `represent`, `Engine<142>` in 128-px strips,
 //!   `Fixed` gains (one engine pass, as when streaming), one thread;
 //! - `serial-minmax`: the same with per-frame min–max (two engine passes);
-//! - `parallel`: the host's `compute_fixed_parallel` on `--threads`
-//!   threads (rayon tiles, per-frame min–max in one pass, f64 planes out;
-//!   it builds its rayon pool on every call);
-//! - `parallel-core`: the core alone over a rayon pool of `--threads` built
-//!   once: the 128-px strips spread over the threads, one engine each,
-//!   RGB bytes with `Fixed` gains straight from the engine's rows into the
-//!   frame (one pass, no f64 planes): what the parallel path costs without
-//!   the host's output planes.
+//! - `parallel`: the host's `represent_parallel`, `Fixed` gains, over a
+//!   rayon pool of `--threads` built once: the 128-px strips spread over
+//!   the threads, one engine each, bytes straight into the frame.
 //!
 //! Without `--prev` (e.g. under `cargo bench`), it times the built-in
 //! textured pair at 640×480 in every mode.
@@ -27,13 +22,10 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{
-    ByteScale, Config, Engine, FlowPixel, FramePair, Params, Plan, Scaling, Sink, represent, rgb,
-};
+use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
 use reynoldsflow_host::Gray;
-use reynoldsflow_host::fixed_engine::compute_fixed_parallel;
+use reynoldsflow_host::fixed_engine::represent_parallel;
 
 mod common;
 use common::{COLS, moving_pair, read_pgm};
@@ -117,71 +109,16 @@ fn computation(
         "parallel" => {
             let prev = Gray::new(w, h, prev).unwrap();
             let next = Gray::new(w, h, next).unwrap();
-            Box::new(move || {
-                let out = compute_fixed_parallel(
-                    &prev,
-                    &next,
-                    Params::DEFAULT,
-                    None,
-                    Scaling::PerFrameMinMax,
-                    threads,
-                )
-                .unwrap();
-                black_box(out);
-            })
-        }
-        "parallel-core" => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads.max(1))
                 .build()
                 .unwrap();
-            let plan = Plan::<COLS>::strips(config).unwrap();
-            let mut rgb = vec![0u8; 3 * w * h];
             Box::new(move || {
-                let frames = FramePair::packed(&config, &prev, &next).unwrap();
-                // Each strip owns its columns of every row: hand each one its
-                // row segments of the frame, so the strips write in parallel.
-                let mut strips: Vec<Vec<&mut [u8]>> =
-                    (0..plan.tile_count()).map(|_| Vec::new()).collect();
-                for row in rgb.chunks_mut(3 * w) {
-                    let mut rest = row;
-                    for strip in strips.iter_mut() {
-                        let take = (3 * plan.tile_width()).min(rest.len());
-                        let (segment, tail) = rest.split_at_mut(take);
-                        strip.push(segment);
-                        rest = tail;
-                    }
-                }
-                pool.install(|| {
-                    strips.par_iter_mut().enumerate().for_each_init(
-                        || Box::new(Engine::<COLS>::new()),
-                        |engine, (index, rows)| {
-                            let mut sink = StripRgb {
-                                rows,
-                                scale: ByteScale::fixed(U16F16::lit("8")),
-                            };
-                            engine.run_tile(&plan, &frames, index, &mut sink).unwrap();
-                        },
-                    )
-                });
-                black_box(&mut rgb);
+                let out = represent_parallel(&prev, &next, Params::DEFAULT, FIXED, &pool).unwrap();
+                black_box(out);
             })
         }
-        other => panic!("unknown --mode {other} (serial, serial-minmax, parallel, parallel-core)"),
-    }
-}
-
-/// One strip's segments of the frame's RGB rows.
-struct StripRgb<'a, 'b> {
-    rows: &'a mut [&'b mut [u8]],
-    scale: ByteScale,
-}
-
-impl Sink for StripRgb<'_, '_> {
-    fn row(&mut self, y: usize, _x: usize, pixels: &[FlowPixel]) {
-        for (dst, px) in self.rows[y].chunks_exact_mut(3).zip(pixels) {
-            dst.copy_from_slice(&rgb(px, &self.scale, &self.scale));
-        }
+        other => panic!("unknown --mode {other} (serial, serial-minmax, parallel)"),
     }
 }
 
@@ -231,8 +168,6 @@ fn main() {
                 ("serial-minmax", 1),
                 ("parallel", 1),
                 ("parallel", 2),
-                ("parallel-core", 1),
-                ("parallel-core", 2),
             ] {
                 let mut run = computation(mode, threads, (w, h), &p, &n);
                 let times = time(&mut *run, 2, 5, 0.5);

@@ -198,6 +198,89 @@ pub fn compute_fixed_parallel(
     Ok(output(width, height, &frame.pixels, rep))
 }
 
+/// The representation alone, its full-height strips spread over `pool`:
+/// bit for bit the bytes of [`compute_fixed`], with no per-pixel planes.
+/// Each strip owns its columns of every output row, so strips write the RGB
+/// frame concurrently; per-frame min–max first gathers the extremes in a
+/// parallel pass of its own, as the core's `represent` does.
+pub fn represent_parallel(
+    prev: &Gray,
+    next: &Gray,
+    params: Params,
+    scaling: Scaling,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<u8>, HostError> {
+    let (plan, frames) = prepare(prev, next, params, None)?;
+    let (width, height) = prev.size();
+    let engine = || Box::new(HostEngine::new());
+    let (scale_d, scale_c) = match scaling {
+        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
+        Scaling::PerFrameMinMax => {
+            let extremes = pool.install(|| {
+                (0..plan.tile_count())
+                    .into_par_iter()
+                    .map_init(engine, |engine, index| {
+                        let mut extremes = ExtremesSink::default();
+                        engine
+                            .run_tile(&plan, &frames, index, &mut extremes)
+                            .map(|()| extremes)
+                    })
+                    .try_reduce(ExtremesSink::default, |mut a, b| {
+                        a.m_d.merge(b.m_d);
+                        a.m_c.merge(b.m_c);
+                        Ok(a)
+                    })
+            })?;
+            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
+        }
+    };
+    let mut rep = vec![0u8; 3 * width * height];
+    // Split every row into the strips' column segments.
+    let mut strips: Vec<Vec<&mut [u8]>> = (0..plan.tile_count())
+        .map(|_| Vec::with_capacity(height))
+        .collect();
+    for row in rep.chunks_mut(3 * width) {
+        let mut rest = row;
+        for strip in &mut strips {
+            let (segment, tail) = rest.split_at_mut((3 * plan.tile_width()).min(rest.len()));
+            strip.push(segment);
+            rest = tail;
+        }
+    }
+    pool.install(|| {
+        strips
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each_init(engine, |engine, (index, rows)| {
+                let mut sink = StripRgb {
+                    rows,
+                    scale_d,
+                    scale_c,
+                };
+                engine.run_tile(&plan, &frames, index, &mut sink)
+            })
+    })?;
+    Ok(rep)
+}
+
+/// One full-height strip's segments of the RGB rows (row `y` of the frame is
+/// `rows[y]`, starting at the strip's first column).
+struct StripRgb<'a, 'b> {
+    rows: &'a mut [&'b mut [u8]],
+    scale_d: ByteScale,
+    scale_c: ByteScale,
+}
+
+impl Sink for StripRgb<'_, '_> {
+    fn row(&mut self, y: usize, _x: usize, pixels: &[FlowPixel]) {
+        if let Some(row) = self.rows.get_mut(y) {
+            for (dst, px) in row.chunks_exact_mut(3).zip(pixels) {
+                dst.copy_from_slice(&rgb(px, &self.scale_d, &self.scale_c));
+            }
+        }
+    }
+}
+
 /// A sink that moves rows from frame coordinates into a tile's own buffer.
 struct Shifted<'a> {
     inner: &'a mut PixelPlane,
@@ -247,6 +330,26 @@ mod tests {
                     "tile {tile:?}, {threads} threads, {scaling:?}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn parallel_representation_equals_the_serial_engine() {
+        let (a, b) = (frame(300, 45, 2), frame(300, 45, 3));
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for scaling in [
+            Scaling::PerFrameMinMax,
+            Scaling::Fixed {
+                k_d: 8u8.into(),
+                k_c: 32u8.into(),
+            },
+        ] {
+            let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
+            let parallel = represent_parallel(&a, &b, Params::DEFAULT, scaling, &pool).unwrap();
+            assert!(parallel == serial.rep, "{scaling:?}");
         }
     }
 
