@@ -22,18 +22,12 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
+use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::Gray;
 use reynoldsflow_host::fixed_engine::represent_parallel;
 
 mod common;
-use common::{COLS, moving_pair, read_pgm};
-
-const FIXED: Scaling = Scaling::Fixed {
-    k_d: U16F16::lit("8"),
-    k_c: U16F16::lit("8"),
-};
+use common::{COLS, FIXED, core_engine, moving_pair, read_pgm};
 
 struct Options {
     prev: Option<String>,
@@ -81,8 +75,6 @@ fn computation(
     prev: &[u8],
     next: &[u8],
 ) -> Box<dyn FnMut()> {
-    let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let (prev, next) = (prev.to_vec(), next.to_vec());
     match mode {
         "serial" | "serial-minmax" => {
             let scaling = if mode == "serial" {
@@ -90,25 +82,11 @@ fn computation(
             } else {
                 Scaling::PerFrameMinMax
             };
-            let plan = Plan::<COLS>::strips(config).unwrap();
-            let mut engine = Box::new(Engine::<COLS>::new());
-            let mut rgb = vec![0u8; 3 * w * h];
-            Box::new(move || {
-                let frames = FramePair::packed(&config, &prev, &next).unwrap();
-                represent(
-                    &mut engine,
-                    &plan,
-                    &frames,
-                    scaling,
-                    black_box(&mut rgb),
-                    (),
-                )
-                .unwrap();
-            })
+            Box::new(core_engine::<COLS>(prev, next, (w, h), None, scaling))
         }
         "parallel" => {
-            let prev = Gray::new(w, h, prev).unwrap();
-            let next = Gray::new(w, h, next).unwrap();
+            let prev = Gray::new(w, h, prev.to_vec()).unwrap();
+            let next = Gray::new(w, h, next.to_vec()).unwrap();
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads.max(1))
                 .build()

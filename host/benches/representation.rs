@@ -12,53 +12,16 @@
 //!
 //! `cargo bench -p reynoldsflow-host --bench representation [-- --quick]`
 
-use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
+use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::Gray;
 use reynoldsflow_host::fixed_engine::compute_fixed_parallel;
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
 
 mod common;
-use common::{COLS, SIZES, moving_pair};
-
-const FIXED: Scaling = Scaling::Fixed {
-    k_d: U16F16::lit("8"),
-    k_c: U16F16::lit("8"),
-};
-
-/// The core's `represent` with an engine of `N` columns over `tile` tiles.
-fn core_engine<const N: usize>(
-    prev: &[u8],
-    next: &[u8],
-    (w, h): (usize, usize),
-    tile: Option<(usize, usize)>,
-    scaling: Scaling,
-) -> impl FnMut() {
-    let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let plan = match tile {
-        None => Plan::<N>::strips(config).unwrap(),
-        Some((tw, th)) => Plan::<N>::new(config, tw, th).unwrap(),
-    };
-    let (prev, next) = (prev.to_vec(), next.to_vec());
-    let mut engine = Box::new(Engine::<N>::new());
-    let mut rgb = vec![0u8; 3 * w * h];
-    move || {
-        let frames = FramePair::packed(&config, &prev, &next).unwrap();
-        represent(
-            &mut engine,
-            &plan,
-            &frames,
-            scaling,
-            black_box(&mut rgb),
-            (),
-        )
-        .unwrap();
-    }
-}
+use common::{COLS, FIXED, SIZES, core_engine, moving_pair};
 
 fn representation_benches(c: &mut Criterion) {
     for (w, h) in SIZES {

@@ -4,11 +4,11 @@
 //!
 //! `cargo bench -p reynoldsflow-host --bench tiling`
 
-use std::hint::black_box;
-
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
+use reynoldsflow_core::Engine;
+
+mod common;
+use common::{FIXED, core_engine};
 
 /// A textured frame moved by (t, t/2) px: every stage has work to do.
 fn frame(w: usize, h: usize, t: f64) -> Vec<u8> {
@@ -24,12 +24,7 @@ fn frame(w: usize, h: usize, t: f64) -> Vec<u8> {
 /// One tile shape: an engine of `COLS` columns computing `tile` tiles.
 fn bench_shape<const COLS: usize>(c: &mut Criterion, w: usize, h: usize, tile: (usize, usize)) {
     let (prev, next) = (frame(w, h, 0.0), frame(w, h, 1.0));
-    let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let plan = Plan::<COLS>::new(config, tile.0, tile.1).unwrap();
-    let frames = FramePair::packed(&config, &prev, &next).unwrap();
-    let mut engine = Box::new(Engine::<COLS>::new());
-    let mut rgb = vec![0u8; 3 * w * h];
-    let k = U16F16::from_num(8);
+    let mut run = core_engine::<COLS>(&prev, &next, (w, h), Some(tile), FIXED);
     let mut group = c.benchmark_group(format!("tiling/{w}x{h}"));
     group.throughput(Throughput::Elements((w * h) as u64));
     let name = format!(
@@ -38,20 +33,7 @@ fn bench_shape<const COLS: usize>(c: &mut Criterion, w: usize, h: usize, tile: (
         tile.1.min(h),
         Engine::<COLS>::WORKING_BYTES
     );
-    group.bench_function(BenchmarkId::from_parameter(name), |b| {
-        b.iter(|| {
-            let scaling = Scaling::Fixed { k_d: k, k_c: k };
-            represent(
-                &mut engine,
-                &plan,
-                &frames,
-                scaling,
-                black_box(&mut rgb),
-                (),
-            )
-            .unwrap();
-        })
-    });
+    group.bench_function(BenchmarkId::from_parameter(name), |b| b.iter(&mut run));
     group.finish();
 }
 

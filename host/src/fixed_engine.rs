@@ -8,7 +8,7 @@ use reynoldsflow_core::{
     Tile, represent, rgb,
 };
 
-use crate::{Gray, HostError};
+use crate::{FlowPlanes, Gray, HostError};
 
 /// Window columns of the host's engine: tiles up to
 /// [`MAX_TILE_WIDTH`] = 128 columns, about 45 KiB of working memory.
@@ -25,18 +25,8 @@ pub const MAX_TILE_WIDTH: usize = HostEngine::MAX_TILE_WIDTH;
 /// The core's output for a frame pair, row-major planes of `width · height`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FixedOutput {
-    /// Columns.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// `v_c` x, the exact value of the core's Q16.16 (`bits / 65536`).
-    pub vcx: Vec<f64>,
-    /// `v_c` y.
-    pub vcy: Vec<f64>,
-    /// `v_d` x.
-    pub vdx: Vec<f64>,
-    /// `v_d` y.
-    pub vdy: Vec<f64>,
+    /// `v_c` and `v_d`, the exact values of the core's Q16.16 (`bits / 65536`).
+    pub planes: FlowPlanes,
     /// `|v_d|` as the core computes it (the exact value of its Q32.32).
     pub m_d: Vec<f64>,
     /// `|v_c|`.
@@ -87,12 +77,14 @@ fn prepare<'a>(
 fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> FixedOutput {
     let plane = |f: &dyn Fn(&FlowPixel) -> f64| pixels.iter().map(f).collect();
     FixedOutput {
-        width,
-        height,
-        vcx: plane(&|p| p.v_c[0].to_num()),
-        vcy: plane(&|p| p.v_c[1].to_num()),
-        vdx: plane(&|p| p.v_d[0].to_num()),
-        vdy: plane(&|p| p.v_d[1].to_num()),
+        planes: FlowPlanes {
+            width,
+            height,
+            vcx: plane(&|p| p.v_c[0].to_num()),
+            vcy: plane(&|p| p.v_c[1].to_num()),
+            vdx: plane(&|p| p.v_d[0].to_num()),
+            vdy: plane(&|p| p.v_d[1].to_num()),
+        },
         m_d: plane(&|p| p.m_d.to_num()),
         m_c: plane(&|p| p.m_c.to_num()),
         rep,
@@ -296,7 +288,18 @@ impl Sink for Shifted<'_> {
 
 #[cfg(test)]
 mod tests {
+    use fixed::types::U16F16;
+
     use super::*;
+
+    /// Both scale modes: per-frame min–max, and gains 8 (|v_d|) and 32 (|v_c|).
+    const SCALINGS: [Scaling; 2] = [
+        Scaling::PerFrameMinMax,
+        Scaling::Fixed {
+            k_d: U16F16::lit("8"),
+            k_c: U16F16::lit("32"),
+        },
+    ];
 
     fn frame(width: usize, height: usize, seed: usize) -> Gray {
         let pixels = (0..width * height)
@@ -308,13 +311,7 @@ mod tests {
     #[test]
     fn parallel_tiles_equal_the_serial_engine() {
         let (a, b) = (frame(300, 45, 0), frame(300, 45, 1));
-        for scaling in [
-            Scaling::PerFrameMinMax,
-            Scaling::Fixed {
-                k_d: 8u8.into(),
-                k_c: 32u8.into(),
-            },
-        ] {
+        for scaling in SCALINGS {
             let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
             for (tile, threads) in [
                 (None, 2),
@@ -340,13 +337,7 @@ mod tests {
             .num_threads(2)
             .build()
             .unwrap();
-        for scaling in [
-            Scaling::PerFrameMinMax,
-            Scaling::Fixed {
-                k_d: 8u8.into(),
-                k_c: 32u8.into(),
-            },
-        ] {
+        for scaling in SCALINGS {
             let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
             let parallel = represent_parallel(&a, &b, Params::DEFAULT, scaling, &pool).unwrap();
             assert!(parallel == serial.rep, "{scaling:?}");

@@ -21,6 +21,7 @@ pub mod cli;
 mod error;
 pub mod eval;
 pub mod fixed_engine;
+pub mod flow_planes;
 pub mod gray;
 pub mod image_io;
 pub mod npy;
@@ -31,4 +32,5 @@ pub mod sequence;
 pub mod viz;
 
 pub use error::{HostError, ImageProblem};
+pub use flow_planes::FlowPlanes;
 pub use gray::{Gray, luma_bt601};

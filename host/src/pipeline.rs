@@ -67,26 +67,16 @@ impl Compute {
                 }
             }
             EngineKind::Fixed => {
-                let lambda_q =
-                    U32F32::checked_from_num(lambda).ok_or_else(|| compute.lambda_range())?;
-                let params = Params {
-                    scale: intensity_scale,
-                    lambda: lambda_q,
-                };
+                let params = core_params(intensity_scale, lambda)?;
                 // The parameters' integer bounds do not depend on the frame size.
                 match Config::new(1, 1, params) {
                     Ok(_) => {}
-                    Err(CoreError::LambdaOutOfRange) => return Err(compute.lambda_range()),
+                    Err(CoreError::LambdaOutOfRange) => {
+                        return Err(lambda_range(intensity_scale, lambda));
+                    }
                     Err(e) => return Err(HostError::invalid("--intensity-scale", e.to_string())),
                 }
-                let scaling = match scale {
-                    ScaleArg::MinMax => Scaling::PerFrameMinMax,
-                    ScaleArg::Fixed { k_d, k_c } => Scaling::Fixed {
-                        k_d: core_gain("KD", k_d)?,
-                        k_c: core_gain("KC", k_c)?,
-                    },
-                };
-                compute.fixed = Some((params, scaling));
+                compute.fixed = Some((params, core_scaling(scale)?));
             }
         }
         Ok(compute)
@@ -106,28 +96,7 @@ impl Compute {
             });
         }
         match self.fixed {
-            None => {
-                let s = self.intensity_scale;
-                let params = FloatParams {
-                    intensity_scale: f64::from(s.num()) / f64::from(s.den()),
-                    lambda: self.lambda,
-                };
-                let flow = reference::compute(prev, next, &params)?;
-                let scaling = match self.scale {
-                    ScaleArg::MinMax => FloatScaling::PerFrameMinMax,
-                    ScaleArg::Fixed { k_d, k_c } => FloatScaling::Fixed { k_d, k_c },
-                };
-                let rep = reference::representation(&flow, prev, scaling);
-                Ok(PairFields {
-                    width: flow.width,
-                    height: flow.height,
-                    vcx: flow.vcx,
-                    vcy: flow.vcy,
-                    vdx: flow.vdx,
-                    vdy: flow.vdy,
-                    rep,
-                })
-            }
+            None => float_pair(prev, next, self.intensity_scale, self.lambda, self.scale),
             Some((params, scaling)) => {
                 let tile = self.tile.map(|t| (t.width, t.height));
                 // One worker per pair already keeps the cores busy: each pair on one
@@ -141,32 +110,58 @@ impl Compute {
                             e => e,
                         })?;
                 Ok(PairFields {
-                    width: out.width,
-                    height: out.height,
-                    vcx: out.vcx,
-                    vcy: out.vcy,
-                    vdx: out.vdx,
-                    vdy: out.vdy,
+                    planes: out.planes,
                     rep: out.rep,
                 })
             }
         }
     }
+}
 
-    /// The fixed engine's λ range at this intensity scale (as `pair` says it).
-    fn lambda_range(&self) -> HostError {
-        let s = f64::from(self.intensity_scale.num()) / f64::from(self.intensity_scale.den());
-        let low = (s * s / 262_144.0).max(0.5f64.powi(33));
-        let high = 16_384.0 * s * s;
-        HostError::invalid(
-            "--lambda",
-            format!(
-                "{} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
-                 use --engine float or another --intensity-scale",
-                self.lambda
-            ),
-        )
-    }
+/// The float reference on one pair, with the representation of `scale`.
+pub(crate) fn float_pair(
+    prev: &Gray,
+    next: &Gray,
+    intensity_scale: IntensityScale,
+    lambda: f64,
+    scale: ScaleArg,
+) -> Result<PairFields, HostError> {
+    let params = FloatParams {
+        intensity_scale: f64::from(intensity_scale.num()) / f64::from(intensity_scale.den()),
+        lambda,
+    };
+    let planes = reference::compute(prev, next, &params)?;
+    let scaling = match scale {
+        ScaleArg::MinMax => FloatScaling::PerFrameMinMax,
+        ScaleArg::Fixed { k_d, k_c } => FloatScaling::Fixed { k_d, k_c },
+    };
+    let rep = reference::representation(&planes, prev, scaling);
+    Ok(PairFields { planes, rep })
+}
+
+/// The core's parameters, λ rounded to its Q32.32 (the range of its
+/// integer bounds is checked by the core, see [`lambda_range`]).
+pub(crate) fn core_params(
+    intensity_scale: IntensityScale,
+    lambda: f64,
+) -> Result<Params, HostError> {
+    let lambda_q =
+        U32F32::checked_from_num(lambda).ok_or_else(|| lambda_range(intensity_scale, lambda))?;
+    Ok(Params {
+        scale: intensity_scale,
+        lambda: lambda_q,
+    })
+}
+
+/// `--scale` for the core, gains as its Q16.16.
+pub(crate) fn core_scaling(scale: ScaleArg) -> Result<Scaling, HostError> {
+    Ok(match scale {
+        ScaleArg::MinMax => Scaling::PerFrameMinMax,
+        ScaleArg::Fixed { k_d, k_c } => Scaling::Fixed {
+            k_d: core_gain("KD", k_d)?,
+            k_c: core_gain("KC", k_c)?,
+        },
+    })
 }
 
 /// A gain as the core's Q16.16, rounded to nearest.
@@ -177,6 +172,22 @@ fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
             format!("{which} = {k} is beyond the fixed engine's range [0, 65536)"),
         )
     })
+}
+
+/// The fixed engine's λ range at the given intensity scale, from the core's
+/// integer bounds (`params`): `Λ8 = round(131072 · λ / s²) ∈ [1, 2³¹)`, and λ
+/// itself in Q32.32.
+pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> HostError {
+    let s = f64::from(intensity_scale.num()) / f64::from(intensity_scale.den());
+    let low = (s * s / 262_144.0).max(0.5f64.powi(33));
+    let high = 16_384.0 * s * s;
+    HostError::invalid(
+        "--lambda",
+        format!(
+            "{lambda} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
+             use --engine float or another --intensity-scale"
+        ),
+    )
 }
 
 /// Where results go.

@@ -14,7 +14,7 @@
 //! This is the plain reading of the SPEC and reproduces the conformance
 //! vectors' rounding residue bit for bit on the 1×1 case.
 
-use crate::{Gray, HostError};
+use crate::{FlowPlanes, Gray, HostError};
 
 /// Radius of input one output pixel depends on (SPEC §6).
 const HALO: isize = 7;
@@ -38,42 +38,8 @@ impl Default for FloatParams {
     }
 }
 
-/// The two fields of a frame pair, row-major planes of `width · height`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FloatFlow {
-    /// Columns.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// Curl-free field `v_c`, x component (pixels, x to the right).
-    pub vcx: Vec<f64>,
-    /// `v_c`, y component (y downward).
-    pub vcy: Vec<f64>,
-    /// Divergence-free field `v_d`, x component.
-    pub vdx: Vec<f64>,
-    /// `v_d`, y component.
-    pub vdy: Vec<f64>,
-}
-
-impl FloatFlow {
-    /// ReynoldsFlow `v_R = v_c + v_d` (SPEC §3 step 10), as `(x, y)` planes.
-    pub fn v_r(&self) -> (Vec<f64>, Vec<f64>) {
-        let add = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a + b).collect();
-        (add(&self.vcx, &self.vdx), add(&self.vcy, &self.vdy))
-    }
-
-    /// The magnitudes `(m_d, m_c) = (|v_d|, |v_c|)` (SPEC §3 step 11), in the
-    /// order of the representation's R and G channels.
-    pub fn magnitudes(&self) -> (Vec<f64>, Vec<f64>) {
-        let norm = |x: &[f64], y: &[f64]| {
-            x.iter()
-                .zip(y)
-                .map(|(x, y)| (x * x + y * y).sqrt())
-                .collect()
-        };
-        (norm(&self.vdx, &self.vdy), norm(&self.vcx, &self.vcy))
-    }
-}
+/// The two fields of a frame pair as the reference computes them.
+pub type FloatFlow = FlowPlanes;
 
 /// How magnitudes become bytes (SPEC §4).
 #[derive(Clone, Copy, Debug, PartialEq)]

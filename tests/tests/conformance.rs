@@ -37,14 +37,22 @@ fn float_scaling(minmax: bool) -> FloatScaling {
 
 /// Field errors of the fixed output against float fields; panics past tolerance.
 fn check_fields(what: &str, fixed: &FixedOutput, float: &FloatFlow) -> (FieldError, FieldError) {
-    let vc = FieldError::measure(&fixed.vcx, &fixed.vcy, &float.vcx, &float.vcy, |m| {
-        (1e-4 * m).max(2f64.powi(-14))
-    });
+    let vc = FieldError::measure(
+        &fixed.planes.vcx,
+        &fixed.planes.vcy,
+        &float.vcx,
+        &float.vcy,
+        |m| (1e-4 * m).max(2f64.powi(-14)),
+    );
     assert_eq!(vc.over, 0, "{what}: v_c beyond tolerance: {vc:?}");
     let q16 = 2f64.powi(-16);
-    let vd = FieldError::measure(&fixed.vdx, &fixed.vdy, &float.vdx, &float.vdy, |m| {
-        (1e-3 * m).max(q16)
-    });
+    let vd = FieldError::measure(
+        &fixed.planes.vdx,
+        &fixed.planes.vdy,
+        &float.vdx,
+        &float.vdy,
+        |m| (1e-3 * m).max(q16),
+    );
     assert!(
         vd.over * 1000 <= vd.pixels,
         "{what}: v_d beyond 1e-3·max at over 0.1 % of pixels: {vd:?}"

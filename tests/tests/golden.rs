@@ -28,7 +28,12 @@ fn fnv(bytes: &[u8]) -> u64 {
 /// then two u64 planes (Q32.32 `|v_c|`, `|v_d|`), little-endian.
 fn field_bytes(out: &FixedOutput) -> Vec<u8> {
     let mut bytes = Vec::new();
-    for plane in [&out.vcx, &out.vcy, &out.vdx, &out.vdy] {
+    for plane in [
+        &out.planes.vcx,
+        &out.planes.vcy,
+        &out.planes.vdx,
+        &out.planes.vdy,
+    ] {
         // Exact: the planes hold Q16.16 values converted to f64.
         bytes.extend(
             plane

@@ -1,4 +1,5 @@
-//! Shared by the benches: the frame sizes, a textured moving pair, and a
+//! Shared by the benches: the frame sizes, a textured moving pair, the
+//! core's `represent` ready to time, and a
 //! stage-by-stage mirror of the engine's schedule (through
 //! `reynoldsflow_core::internals`) that records every stage's real inputs
 //! for one strip, so each kernel can be timed or profiled on its own over
@@ -11,12 +12,14 @@
 
 use std::hint::black_box;
 
-use reynoldsflow_core::fixed::types::{I16F16, U32F32};
+use reynoldsflow_core::fixed::types::{I16F16, U16F16, U32F32};
 use reynoldsflow_core::internals::{
     Products, ResidualInputs, StructureSums, boundary_minus_domain, curl_free_q32,
     divergence_free_q32, magnitude_q32, q16, smooth, structure_row, vertical_binomial,
 };
-use reynoldsflow_core::{Config, Engine, FlowPixel, FramePair, HALO, Params, Plan, Sink, Tile};
+use reynoldsflow_core::{
+    Config, Engine, FlowPixel, FramePair, HALO, Params, Plan, Scaling, Sink, Tile, represent,
+};
 use reynoldsflow_host::fixed_engine::ENGINE_COLS;
 
 /// Window columns of the host engine (strips of 128 output columns).
@@ -24,6 +27,43 @@ pub const COLS: usize = ENGINE_COLS;
 
 /// The frame sizes every bench covers.
 pub const SIZES: [(usize, usize); 4] = [(160, 120), (320, 240), (640, 480), (1280, 720)];
+
+/// Constant gains 8 for both magnitudes: one engine pass, as when streaming.
+pub const FIXED: Scaling = Scaling::Fixed {
+    k_d: U16F16::lit("8"),
+    k_c: U16F16::lit("8"),
+};
+
+/// The core's `represent` with an engine of `N` columns over `tile` tiles
+/// (`None`: full-height strips), one call per run of the closure.
+pub fn core_engine<const N: usize>(
+    prev: &[u8],
+    next: &[u8],
+    (w, h): (usize, usize),
+    tile: Option<(usize, usize)>,
+    scaling: Scaling,
+) -> impl FnMut() + use<N> {
+    let config = Config::new(w, h, Params::DEFAULT).unwrap();
+    let plan = match tile {
+        None => Plan::<N>::strips(config).unwrap(),
+        Some((tw, th)) => Plan::<N>::new(config, tw, th).unwrap(),
+    };
+    let (prev, next) = (prev.to_vec(), next.to_vec());
+    let mut engine = Box::new(Engine::<N>::new());
+    let mut rgb = vec![0u8; 3 * w * h];
+    move || {
+        let frames = FramePair::packed(&config, &prev, &next).unwrap();
+        represent(
+            &mut engine,
+            &plan,
+            &frames,
+            scaling,
+            black_box(&mut rgb),
+            (),
+        )
+        .unwrap();
+    }
+}
 
 /// `κ = 6144 / s` for the default intensity scale `s = 1/255` (SPEC §1):
 /// the residual's constant (`Config` keeps its own copy private; the

@@ -4,12 +4,11 @@
 
 use std::path::PathBuf;
 
-use fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{Error as CoreError, IntensityScale, Params, Scaling};
+use reynoldsflow_core::{Error as CoreError, IntensityScale};
 
 use super::values::{self, EngineKind, ScaleArg, TileSize};
-use crate::reference::{self, FloatParams, FloatScaling};
-use crate::{Gray, HostError, atomic, fixed_engine, image_io, npy};
+use crate::outputs::PairFields;
+use crate::{Gray, HostError, atomic, fixed_engine, image_io, npy, pipeline};
 
 /// Arguments of `reynoldsflow pair`.
 #[derive(Debug, clap::Args)]
@@ -45,14 +44,6 @@ pub struct PairArgs {
     pub tile: Option<TileSize>,
 }
 
-/// What `pair` writes, before it is encoded.
-struct PairOutput {
-    width: usize,
-    height: usize,
-    fields: [(&'static str, Vec<f64>); 4],
-    rep: Vec<u8>,
-}
-
 /// Run the subcommand.
 pub fn run(args: &PairArgs) -> Result<(), HostError> {
     if args.tile.is_some() && args.engine == EngineKind::Float {
@@ -72,83 +63,34 @@ pub fn run(args: &PairArgs) -> Result<(), HostError> {
         });
     }
     let output = match args.engine {
-        EngineKind::Float => run_float(args, &prev, &next)?,
+        EngineKind::Float => {
+            pipeline::float_pair(&prev, &next, args.intensity_scale, args.lambda, args.scale)?
+        }
         EngineKind::Fixed => run_fixed(args, &prev, &next)?,
     };
 
-    let (h, w) = (output.height, output.width);
-    let npys = output
-        .fields
-        .map(|(name, data)| (name, npy::encode(h, w, &data)));
-    let png = image_io::encode_png(w, h, &output.rep)?;
-    let mut files: Vec<(&str, &[u8])> = npys
-        .iter()
-        .map(|(name, bytes)| (*name, bytes.as_slice()))
-        .collect();
-    files.push(("rep.png", &png));
+    let p = &output.planes;
+    let npy = |data: &[f64]| npy::encode(p.height, p.width, data);
+    let (vcx, vcy, vdx, vdy) = (npy(&p.vcx), npy(&p.vcy), npy(&p.vdx), npy(&p.vdy));
+    let png = image_io::encode_png(p.width, p.height, &output.rep)?;
+    let files: [(&str, &[u8]); 5] = [
+        ("vcx.npy", &vcx),
+        ("vcy.npy", &vcy),
+        ("vdx.npy", &vdx),
+        ("vdy.npy", &vdy),
+        ("rep.png", &png),
+    ];
     atomic::write_files(&args.out, &files)
 }
 
-fn run_float(args: &PairArgs, prev: &Gray, next: &Gray) -> Result<PairOutput, HostError> {
-    let s = args.intensity_scale;
-    let params = FloatParams {
-        intensity_scale: f64::from(s.num()) / f64::from(s.den()),
-        lambda: args.lambda,
-    };
-    let flow = reference::compute(prev, next, &params)?;
-    let scaling = match args.scale {
-        ScaleArg::MinMax => FloatScaling::PerFrameMinMax,
-        ScaleArg::Fixed { k_d, k_c } => FloatScaling::Fixed { k_d, k_c },
-    };
-    let rep = reference::representation(&flow, prev, scaling);
-    Ok(PairOutput {
-        width: flow.width,
-        height: flow.height,
-        fields: [
-            ("vcx.npy", flow.vcx),
-            ("vcy.npy", flow.vcy),
-            ("vdx.npy", flow.vdx),
-            ("vdy.npy", flow.vdy),
-        ],
-        rep,
-    })
-}
-
-/// A gain as the core's Q16.16, rounded to nearest.
-fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
-    U16F16::checked_from_num(k).ok_or_else(|| {
-        HostError::invalid(
-            "--scale",
-            format!("{which} = {k} is beyond the fixed engine's range [0, 65536)"),
-        )
-    })
-}
-
-fn run_fixed(args: &PairArgs, prev: &Gray, next: &Gray) -> Result<PairOutput, HostError> {
-    let lambda = U32F32::checked_from_num(args.lambda).ok_or_else(|| lambda_range(args))?;
-    let params = Params {
-        scale: args.intensity_scale,
-        lambda,
-    };
-    let scaling = match args.scale {
-        ScaleArg::MinMax => Scaling::PerFrameMinMax,
-        ScaleArg::Fixed { k_d, k_c } => Scaling::Fixed {
-            k_d: core_gain("KD", k_d)?,
-            k_c: core_gain("KC", k_c)?,
-        },
-    };
+fn run_fixed(args: &PairArgs, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
+    let params = pipeline::core_params(args.intensity_scale, args.lambda)?;
+    let scaling = pipeline::core_scaling(args.scale)?;
     let tile = args.tile.map(|t| (t.width, t.height));
     let out = fixed_engine::compute_fixed(prev, next, params, tile, scaling)
         .map_err(|e| in_context(e, args))?;
-    Ok(PairOutput {
-        width: out.width,
-        height: out.height,
-        fields: [
-            ("vcx.npy", out.vcx),
-            ("vcy.npy", out.vcy),
-            ("vdx.npy", out.vdx),
-            ("vdy.npy", out.vdy),
-        ],
+    Ok(PairFields {
+        planes: out.planes,
         rep: out.rep,
     })
 }
@@ -157,28 +99,13 @@ fn run_fixed(args: &PairArgs, prev: &Gray, next: &Gray) -> Result<PairOutput, Ho
 fn in_context(e: HostError, args: &PairArgs) -> HostError {
     let HostError::Core(core) = e else { return e };
     let about = match core {
-        CoreError::LambdaOutOfRange => return lambda_range(args),
+        CoreError::LambdaOutOfRange => {
+            return pipeline::lambda_range(args.intensity_scale, args.lambda);
+        }
         CoreError::ScaleOutOfRange => "--intensity-scale".to_owned(),
         CoreError::TileOutOfFrame | CoreError::TileTooWide { .. } => "--tile".to_owned(),
         CoreError::EmptyFrame | CoreError::FrameTooLarge => args.f0.display().to_string(),
         _ => return HostError::Core(core),
     };
     HostError::invalid(about, core.to_string())
-}
-
-/// The fixed engine's λ range at the given intensity scale, from the core's
-/// integer bounds (`params`): `Λ8 = round(131072 · λ / s²) ∈ [1, 2³¹)`, and λ
-/// itself in Q32.32.
-fn lambda_range(args: &PairArgs) -> HostError {
-    let s = f64::from(args.intensity_scale.num()) / f64::from(args.intensity_scale.den());
-    let low = (s * s / 262_144.0).max(0.5f64.powi(33));
-    let high = 16_384.0 * s * s;
-    HostError::invalid(
-        "--lambda",
-        format!(
-            "{} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
-             use --engine float or another --intensity-scale",
-            args.lambda
-        ),
-    )
 }

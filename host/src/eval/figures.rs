@@ -13,6 +13,15 @@ fn color(m: Method) -> plotters::style::RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
+/// Title of a scenario's panel: its name and the level `r` was run at.
+fn level_title(scenario: Scenario, r: &SequenceResult) -> String {
+    format!(
+        "{} ({})",
+        scenario.name(),
+        scenario.level_label(r.spec.level)
+    )
+}
+
 /// Methods on the comparison plots: the fixed core is left out, its curve
 /// lies on the float reference's (the report gives the largest gap).
 const PLOTTED: [Method; 6] = [
@@ -23,6 +32,19 @@ const PLOTTED: [Method; 6] = [
     Method::RfVc,
     Method::RfVrSmallScale,
 ];
+
+/// One solid curve per method of [`PLOTTED`], through `points(method)`.
+fn plotted_series(points: impl Fn(Method) -> Vec<(f64, f64)>) -> Vec<Series> {
+    PLOTTED
+        .into_iter()
+        .map(|m| Series {
+            label: m.label().to_owned(),
+            color: color(m),
+            points: points(m),
+            dashed: false,
+        })
+        .collect()
+}
 
 /// Mean |v_c| and |v_d| over the interior, frame by frame, per scenario
 /// (the paper's bottom-row figure), with the true mean displacement.
@@ -47,11 +69,7 @@ pub fn temporal_magnitudes(
             };
             let at = |n: usize| &r.pairs[n];
             Some(Panel {
-                title: format!(
-                    "{} ({})",
-                    scenario.name(),
-                    scenario.level_label(r.spec.level)
-                ),
+                title: level_title(scenario, r),
                 x_label: "frame n (pair n → n+1)".to_owned(),
                 y_label: "mean magnitude".to_owned(),
                 log_y: false,
@@ -93,23 +111,17 @@ pub fn aepe_vs_magnitude(
                 "spurious flow (px)".to_owned()
             },
             log_y: true,
-            series: PLOTTED
-                .into_iter()
-                .map(|m| Series {
-                    label: m.label().to_owned(),
-                    color: color(m),
-                    points: config
-                        .levels
-                        .iter()
-                        .filter_map(|&li| {
-                            let r = find(results, pattern, scenario, li, false)?;
-                            let x = scenario.level_axis_value(r.spec.level);
-                            Some((x, r.mean(m, |x| Some(x.aepe))?))
-                        })
-                        .collect(),
-                    dashed: false,
-                })
-                .collect(),
+            series: plotted_series(|m| {
+                config
+                    .levels
+                    .iter()
+                    .filter_map(|&li| {
+                        let r = find(results, pattern, scenario, li, false)?;
+                        let x = scenario.level_axis_value(r.spec.level);
+                        Some((x, r.mean(m, |x| Some(x.aepe))?))
+                    })
+                    .collect()
+            }),
         })
         .collect();
     Figure {
@@ -131,30 +143,19 @@ pub fn acs_over_time(results: &[SequenceResult], config: &EvalConfig, pattern: P
         .filter_map(|scenario| {
             let r = find(results, pattern, scenario, config.reference_level, false)?;
             Some(Panel {
-                title: format!(
-                    "{} ({})",
-                    scenario.name(),
-                    scenario.level_label(r.spec.level)
-                ),
+                title: level_title(scenario, r),
                 x_label: "frame n".to_owned(),
                 y_label: "ACS_sp".to_owned(),
                 log_y: false,
-                series: PLOTTED
-                    .into_iter()
-                    .map(|m| Series {
-                        label: m.label().to_owned(),
-                        color: color(m),
-                        points: r
-                            .pairs
-                            .iter()
-                            .filter_map(|p| {
-                                let (_, x) = p.measures.iter().find(|(k, _)| *k == m)?;
-                                Some((p.frame as f64, x.acs_sp?))
-                            })
-                            .collect(),
-                        dashed: false,
-                    })
-                    .collect(),
+                series: plotted_series(|m| {
+                    r.pairs
+                        .iter()
+                        .filter_map(|p| {
+                            let (_, x) = p.measures.iter().find(|(k, _)| *k == m)?;
+                            Some((p.frame as f64, x.acs_sp?))
+                        })
+                        .collect()
+                }),
             })
         })
         .collect();

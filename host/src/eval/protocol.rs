@@ -305,22 +305,8 @@ fn evaluate_sequence(
         clock(Method::RfVrSmallScale, t);
 
         let (vrx, vry) = rf.v_r();
-        let fixed_vr = Flow::from_parts(
-            w,
-            h,
-            fixed
-                .vcx
-                .iter()
-                .zip(&fixed.vdx)
-                .map(|(a, b)| a + b)
-                .collect(),
-            fixed
-                .vcy
-                .iter()
-                .zip(&fixed.vdy)
-                .map(|(a, b)| a + b)
-                .collect(),
-        );
+        let (fx, fy) = fixed.planes.v_r();
+        let fixed_vr = Flow::from_parts(w, h, fx, fy);
         let vr = Flow::from_parts(w, h, vrx, vry);
         let fixed_max_diff = (0..w * h)
             .map(|i| (fixed_vr.u[i] - vr.u[i]).hypot(fixed_vr.v[i] - vr.v[i]))

@@ -88,6 +88,19 @@ const COLUMNS: [Column; 7] = [
     },
 ];
 
+/// The rest of a table's head after its two label columns (`s` ends with
+/// them): one right-aligned column per head, then the rule line.
+fn push_head(s: &mut String, heads: impl IntoIterator<Item = impl std::fmt::Display>) {
+    let mut columns = 0;
+    for head in heads {
+        let _ = write!(s, " {head} |");
+        columns += 1;
+    }
+    s.push_str("\n|---|---|");
+    s.push_str(&"---:|".repeat(columns));
+    s.push('\n');
+}
+
 /// Row label of a pattern × scenario.
 fn scene_label(pattern: Pattern, scenario: Scenario) -> String {
     format!("{} / {}", pattern.name(), scenario.name())
@@ -96,12 +109,7 @@ fn scene_label(pattern: Pattern, scenario: Scenario) -> String {
 /// The main table: dense AEPE, scenes × methods, at a level.
 pub fn aepe_table(results: &[SequenceResult], level: usize, noisy: bool) -> String {
     let mut s = String::from("| scene | level |");
-    for m in Method::ALL {
-        let _ = write!(s, " {} |", m.label());
-    }
-    s.push_str("\n|---|---|");
-    s.push_str(&"---:|".repeat(Method::ALL.len()));
-    s.push('\n');
+    push_head(&mut s, Method::ALL.map(Method::label));
     for pattern in Pattern::ALL {
         for scenario in Scenario::ALL {
             let Some(r) = find(results, pattern, scenario, level, noisy) else {
@@ -125,12 +133,7 @@ pub fn aepe_table(results: &[SequenceResult], level: usize, noisy: bool) -> Stri
 /// Every measure, scene × method rows, at a level.
 fn full_table(results: &[SequenceResult], pattern: Pattern, level: usize, noisy: bool) -> String {
     let mut s = String::from("| scenario | method |");
-    for c in &COLUMNS {
-        let _ = write!(s, " {} |", c.head);
-    }
-    s.push_str("\n|---|---|");
-    s.push_str(&"---:|".repeat(COLUMNS.len()));
-    s.push('\n');
+    push_head(&mut s, COLUMNS.iter().map(|c| c.head));
     for scenario in Scenario::ALL {
         let Some(r) = find(results, pattern, scenario, level, noisy) else {
             continue;
@@ -149,12 +152,7 @@ fn full_table(results: &[SequenceResult], pattern: Pattern, level: usize, noisy:
 /// Dense AEPE per level, one table per pattern: rows scenario × method.
 fn sweep_table(results: &[SequenceResult], config: &EvalConfig, pattern: Pattern) -> String {
     let mut s = String::from("| scenario | method |");
-    for &li in &config.levels {
-        let _ = write!(s, " level {li} |");
-    }
-    s.push_str("\n|---|---|");
-    s.push_str(&"---:|".repeat(config.levels.len()));
-    s.push('\n');
+    push_head(&mut s, config.levels.iter().map(|li| format!("level {li}")));
     for scenario in Scenario::ALL {
         let _ = write!(s, "| {} | levels |", scenario.name());
         for &li in &config.levels {
@@ -529,12 +527,7 @@ fn summary(results: &[SequenceResult], config: &EvalConfig) -> String {
          the two illumination scenes (truth 0), reference level, clean:\n\n\
          | pattern | measure |",
     );
-    for m in Method::ALL {
-        let _ = write!(s, " {} |", m.label());
-    }
-    s.push_str("\n|---|---|");
-    s.push_str(&"---:|".repeat(Method::ALL.len()));
-    s.push('\n');
+    push_head(&mut s, Method::ALL.map(Method::label));
     for p in Pattern::ALL {
         for (what, f) in [
             (

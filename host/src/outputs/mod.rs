@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use npyz::WriterBuilder;
 
-use crate::{HostError, atomic, image_io, viz};
+use crate::{FlowPlanes, HostError, atomic, image_io, viz};
 
 pub mod flo;
 
@@ -110,18 +110,8 @@ pub fn parse_fields(s: &str) -> Result<Vec<Field>, String> {
 /// One result: the fields of a frame pair and its representation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PairFields {
-    /// Columns.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// `v_c` x, row-major.
-    pub vcx: Vec<f64>,
-    /// `v_c` y.
-    pub vcy: Vec<f64>,
-    /// `v_d` x.
-    pub vdx: Vec<f64>,
-    /// `v_d` y.
-    pub vdy: Vec<f64>,
+    /// `v_c` and `v_d`.
+    pub planes: FlowPlanes,
     /// The representation `[|v_d|, |v_c|, fⁿ]`, RGB8.
     pub rep: Vec<u8>,
 }
@@ -129,11 +119,11 @@ pub struct PairFields {
 impl PairFields {
     /// The `(x, y)` planes of a field.
     pub fn field(&self, field: Field) -> (Vec<f64>, Vec<f64>) {
-        let add = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a + b).collect();
+        let p = &self.planes;
         match field {
-            Field::VC => (self.vcx.clone(), self.vcy.clone()),
-            Field::VD => (self.vdx.clone(), self.vdy.clone()),
-            Field::VR => (add(&self.vcx, &self.vdx), add(&self.vcy, &self.vdy)),
+            Field::VC => (p.vcx.clone(), p.vcy.clone()),
+            Field::VD => (p.vdx.clone(), p.vdy.clone()),
+            Field::VR => p.v_r(),
         }
     }
 }
@@ -207,7 +197,7 @@ impl OutputSpec {
 
     /// Every file of one result: `(path relative to the output folder, bytes)`.
     pub fn files(&self, stem: &str, f: &PairFields) -> Result<Vec<(PathBuf, Vec<u8>)>, HostError> {
-        let (w, h) = (f.width, f.height);
+        let (w, h) = (f.planes.width, f.planes.height);
         let mut files = Vec::new();
         if self.rep {
             let png = image_io::encode_png(w, h, &self.image(f))?;
@@ -469,12 +459,14 @@ mod tests {
 
     fn fields() -> PairFields {
         PairFields {
-            width: 2,
-            height: 1,
-            vcx: vec![1.0, 0.0],
-            vcy: vec![0.0, 2.0],
-            vdx: vec![0.5, 0.0],
-            vdy: vec![0.0, -1.0],
+            planes: FlowPlanes {
+                width: 2,
+                height: 1,
+                vcx: vec![1.0, 0.0],
+                vcy: vec![0.0, 2.0],
+                vdx: vec![0.5, 0.0],
+                vdy: vec![0.0, -1.0],
+            },
             rep: vec![10, 20, 30, 40, 50, 60],
         }
     }
