@@ -63,6 +63,11 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     }
 }
 
+/// The sink that does nothing.
+impl Sink for () {
+    fn row(&mut self, _y: usize, _x: usize, _pixels: &[FlowPixel]) {}
+}
+
 /// Both sinks see every row.
 impl<A: Sink, B: Sink> Sink for (A, B) {
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
@@ -172,20 +177,16 @@ impl<const COLS: usize> Engine<COLS> {
     }
 
     fn tile<S: Sink>(&mut self, config: &Config, frames: &FramePair<'_>, tile: Tile, sink: &mut S) {
+        let y_first = tile.y as isize - HALO as isize;
         self.begin(Window {
             x_first: tile.x as isize - HALO as isize,
             n: tile.width + 2 * HALO,
-            y_first: tile.y as isize - HALO as isize,
+            y_first,
             t: 0,
         });
-        for k in 0..tile.height + 2 * HALO {
-            let y = tile.y as isize - HALO as isize + k as isize;
-            self.push(
-                config,
-                frames.prev().clamped_row(y),
-                frames.next().clamped_row(y),
-                sink,
-            );
+        for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
+            let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
+            self.push(config, prev, next, sink);
         }
     }
 

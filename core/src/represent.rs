@@ -35,8 +35,3 @@ pub fn represent<const COLS: usize, S: Sink>(
     let sink = RgbSink::new(plan.config(), rgb, scale_d, scale_c)?;
     engine.run(plan, frames, &mut (sink, also))
 }
-
-/// The sink that does nothing.
-impl Sink for () {
-    fn row(&mut self, _y: usize, _x: usize, _pixels: &[crate::FlowPixel]) {}
-}

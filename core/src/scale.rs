@@ -38,18 +38,22 @@ pub struct ByteScale {
 
 impl ByteScale {
     fn new(offset: u64, shift: u32, gain: u64, frac: u32) -> Self {
-        let limit = match gain {
-            0 => u64::MAX,
-            g => (1u64 << (frac + 8)).div_ceil(g),
-        };
-        // With a zero gain, x < limit always: (m − offset) >> shift < 2⁶⁴ − 1.
-        let shift = if gain == 0 { 1 } else { shift };
-        Self {
-            offset,
-            shift,
-            gain,
-            frac,
-            limit,
+        match gain {
+            // Everything maps to 0: an offset no magnitude exceeds makes x = 0.
+            0 => Self {
+                offset: u64::MAX,
+                shift: 0,
+                gain: 0,
+                frac,
+                limit: u64::MAX,
+            },
+            g => Self {
+                offset,
+                shift,
+                gain,
+                frac,
+                limit: (1u64 << (frac + 8)).div_ceil(g),
+            },
         }
     }
 

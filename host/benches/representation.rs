@@ -5,9 +5,10 @@
 //!   streaming), one thread;
 //! - `core/strips-minmax`: the same with per-frame min–max (two passes);
 //! - `core/tiles-64x64`: an `Engine<78>` over 64×64 tiles, `Fixed`;
-//! - `host/parallel-1t`, `host/parallel-2t`: `compute_fixed_parallel`
-//!   (rayon tiles, per-frame min–max in one pass, f64 planes out) on 1
-//!   and 2 threads;
+//! - `host/one-pass`: `compute_fixed_one_pass` (per-frame min–max in one
+//!   pass, f64 planes out), one thread;
+//! - `host/parallel-1t`, `host/parallel-2t`: `represent_parallel`
+//!   (strips on a rayon pool, per-frame min–max) on 1 and 2 threads;
 //! - `float/reference`: the float64 reference, `compute` + `representation`.
 //!
 //! `cargo bench -p reynoldsflow-host --bench representation [-- --quick]`
@@ -17,7 +18,7 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::Gray;
-use reynoldsflow_host::fixed_engine::compute_fixed_parallel;
+use reynoldsflow_host::fixed_engine::{compute_fixed_one_pass, represent_parallel};
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
 
 mod common;
@@ -47,19 +48,22 @@ fn representation_benches(c: &mut Criterion) {
         group.bench_function(BenchmarkId::from_parameter("core/tiles-64x64"), |b| {
             b.iter(&mut run)
         });
+        group.bench_function(BenchmarkId::from_parameter("host/one-pass"), |b| {
+            b.iter(|| {
+                let minmax = Scaling::PerFrameMinMax;
+                compute_fixed_one_pass(&gprev, &gnext, Params::DEFAULT, None, minmax).unwrap()
+            })
+        });
         for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             let id = format!("host/parallel-{threads}t");
             group.bench_function(BenchmarkId::from_parameter(id), |b| {
                 b.iter(|| {
-                    compute_fixed_parallel(
-                        &gprev,
-                        &gnext,
-                        Params::DEFAULT,
-                        None,
-                        Scaling::PerFrameMinMax,
-                        threads,
-                    )
-                    .unwrap()
+                    let minmax = Scaling::PerFrameMinMax;
+                    represent_parallel(&gprev, &gnext, Params::DEFAULT, minmax, &pool).unwrap()
                 })
             });
         }

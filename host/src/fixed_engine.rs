@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 use reynoldsflow_core::{
     ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink,
-    Tile, represent, rgb,
+    represent, rgb,
 };
 
 use crate::{FlowPlanes, Gray, HostError};
@@ -117,17 +117,16 @@ pub fn compute_fixed(
     Ok(output(width, height, &pixels.pixels, rep))
 }
 
-/// The same output as [`compute_fixed`], bit for bit, with the tiles spread
-/// over `threads` cores: one engine per worker, each tile into its own
-/// buffer, assembled in the frame; the bytes are made once every pixel is
-/// in, so per-frame min–max costs one engine pass, not two.
-pub fn compute_fixed_parallel(
+/// The same output as [`compute_fixed`], bit for bit, in one engine pass:
+/// every pixel is kept, so per-frame min–max needs no second pass (what
+/// `run` uses per pair; its parallelism is across pairs). For one pair over
+/// many cores, see [`represent_parallel`].
+pub fn compute_fixed_one_pass(
     prev: &Gray,
     next: &Gray,
     params: Params,
     tile: Option<(usize, usize)>,
     scaling: Scaling,
-    threads: usize,
 ) -> Result<FixedOutput, HostError> {
     let (plan, frames) = prepare(prev, next, params, tile)?;
     let (width, height) = prev.size();
@@ -135,45 +134,8 @@ pub fn compute_fixed_parallel(
         width,
         pixels: vec![FlowPixel::default(); width * height],
     };
-    if threads <= 1 {
-        // One core: no pool, no per-tile buffers.
-        let mut engine = Box::new(HostEngine::new());
-        engine.run(&plan, &frames, &mut frame)?;
-    } else {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| HostError::invalid("--threads", e.to_string()))?;
-        let tiles: Vec<(Tile, Vec<FlowPixel>)> = pool.install(|| {
-            (0..plan.tile_count())
-                .into_par_iter()
-                .filter_map(|index| plan.tile(index).map(|tile| (index, tile)))
-                .map_init(
-                    || Box::new(HostEngine::new()),
-                    |engine, (index, tile)| {
-                        let mut buffer = PixelPlane {
-                            width: tile.width,
-                            pixels: vec![FlowPixel::default(); tile.width * tile.height],
-                        };
-                        // Rows arrive in frame coordinates: shift them into the tile's buffer.
-                        let mut shifted = Shifted {
-                            inner: &mut buffer,
-                            x: tile.x,
-                            y: tile.y,
-                        };
-                        engine
-                            .run_tile(&plan, &frames, index, &mut shifted)
-                            .map(|()| (tile, buffer.pixels))
-                    },
-                )
-                .collect::<Result<_, _>>()
-        })?;
-        for (tile, pixels) in &tiles {
-            for (row, chunk) in pixels.chunks(tile.width).enumerate() {
-                frame.row(tile.y + row, tile.x, chunk);
-            }
-        }
-    }
+    let mut engine = Box::new(HostEngine::new());
+    engine.run(&plan, &frames, &mut frame)?;
     let (scale_d, scale_c) = match scaling {
         Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
         Scaling::PerFrameMinMax => {
@@ -273,19 +235,6 @@ impl Sink for StripRgb<'_, '_> {
     }
 }
 
-/// A sink that moves rows from frame coordinates into a tile's own buffer.
-struct Shifted<'a> {
-    inner: &'a mut PixelPlane,
-    x: usize,
-    y: usize,
-}
-
-impl Sink for Shifted<'_> {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
-        self.inner.row(y - self.y, x - self.x, pixels);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use fixed::types::U16F16;
@@ -309,23 +258,14 @@ mod tests {
     }
 
     #[test]
-    fn parallel_tiles_equal_the_serial_engine() {
+    fn one_pass_equals_the_serial_engine() {
         let (a, b) = (frame(300, 45, 0), frame(300, 45, 1));
         for scaling in SCALINGS {
             let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
-            for (tile, threads) in [
-                (None, 2),
-                (Some((17, 9)), 2),
-                (Some((128, 45)), 1),
-                (Some((1, 45)), 3),
-            ] {
-                let parallel =
-                    compute_fixed_parallel(&a, &b, Params::DEFAULT, tile, scaling, threads)
-                        .unwrap();
-                assert!(
-                    parallel == serial,
-                    "tile {tile:?}, {threads} threads, {scaling:?}"
-                );
+            for tile in [None, Some((17, 9)), Some((128, 45)), Some((1, 45))] {
+                let one_pass =
+                    compute_fixed_one_pass(&a, &b, Params::DEFAULT, tile, scaling).unwrap();
+                assert!(one_pass == serial, "tile {tile:?}, {scaling:?}");
             }
         }
     }

@@ -101,14 +101,13 @@ impl Compute {
                 let tile = self.tile.map(|t| (t.width, t.height));
                 // One worker per pair already keeps the cores busy: each pair on one
                 // thread, in the single-pass path (the same bytes as `compute_fixed`).
-                let out =
-                    fixed_engine::compute_fixed_parallel(prev, next, params, tile, scaling, 1)
-                        .map_err(|e| match e {
-                            HostError::Core(
-                                c @ (CoreError::TileOutOfFrame | CoreError::TileTooWide { .. }),
-                            ) => HostError::invalid("--tile", c.to_string()),
-                            e => e,
-                        })?;
+                let out = fixed_engine::compute_fixed_one_pass(prev, next, params, tile, scaling)
+                    .map_err(|e| match e {
+                    HostError::Core(
+                        c @ (CoreError::TileOutOfFrame | CoreError::TileTooWide { .. }),
+                    ) => HostError::invalid("--tile", c.to_string()),
+                    e => e,
+                })?;
                 Ok(PairFields {
                     planes: out.planes,
                     rep: out.rep,
