@@ -69,11 +69,10 @@ impl<'e, const COLS: usize> RowStream<'e, COLS> {
             return Err(Error::StreamFinished);
         }
         let needed = self.config.width();
-        let got = prev.len().min(next.len());
-        if got < needed {
+        let (Some(prev), Some(next)) = (prev.get(..needed), next.get(..needed)) else {
+            let got = prev.len().min(next.len());
             return Err(Error::BufferTooShort { needed, got });
-        }
-        let (prev, next) = (&prev[..needed], &next[..needed]);
+        };
         let last = self.rows_in + 1 == self.config.height();
         let repeats = 1 + if self.rows_in == 0 { HALO } else { 0 } + if last { HALO } else { 0 };
         for _ in 0..repeats {
