@@ -58,6 +58,7 @@ pub trait Sink {
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
+    #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         (**self).row(y, x, pixels)
     }
@@ -70,6 +71,7 @@ impl Sink for () {
 
 /// Both sinks see every row.
 impl<A: Sink, B: Sink> Sink for (A, B) {
+    #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         self.0.row(y, x, pixels);
         self.1.row(y, x, pixels);
@@ -147,6 +149,7 @@ impl<const COLS: usize> Engine<COLS> {
 
     /// Compute every tile of `plan` into `sink`. Fails only when the frames
     /// are not of the plan's size.
+    #[inline(always)]
     pub fn run<S: Sink>(
         &mut self,
         plan: &Plan<COLS>,
@@ -163,6 +166,7 @@ impl<const COLS: usize> Engine<COLS> {
     /// Compute tile `index` of `plan` (for callers that spread tiles over
     /// cores). Fails when the frames are not of the plan's size or the index
     /// is past the last tile.
+    #[inline(always)]
     pub fn run_tile<S: Sink>(
         &mut self,
         plan: &Plan<COLS>,
@@ -176,6 +180,7 @@ impl<const COLS: usize> Engine<COLS> {
         Ok(())
     }
 
+    #[inline(always)]
     fn tile<S: Sink>(&mut self, config: &Config, frames: &FramePair<'_>, tile: Tile, sink: &mut S) {
         let y_first = tile.y as isize - HALO as isize;
         self.begin(Window {
@@ -190,6 +195,7 @@ impl<const COLS: usize> Engine<COLS> {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn begin(&mut self, window: Window) {
         self.window = Window {
             n: window.n.min(COLS),
@@ -200,6 +206,7 @@ impl<const COLS: usize> Engine<COLS> {
 
     /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
     /// frame width) and run every stage it completes.
+    #[inline(always)]
     pub(crate) fn push<S: Sink>(
         &mut self,
         config: &Config,
@@ -262,6 +269,7 @@ impl<const COLS: usize> Engine<COLS> {
     }
 
     /// Solve and hand over output row `o` (window rows; `o ≥ 7`).
+    #[inline(always)]
     fn emit<S: Sink>(&mut self, config: &Config, o: usize, sink: &mut S) {
         let Window {
             x_first,
@@ -316,6 +324,7 @@ impl<const COLS: usize> Engine<COLS> {
 
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the
 /// frame (SPEC §2), as `p0` and `d = p1 − p0`.
+#[inline(always)]
 fn load_row<const COLS: usize>(
     prev: &[u8],
     next: &[u8],

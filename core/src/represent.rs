@@ -4,6 +4,7 @@ use crate::{ByteScale, Engine, Error, ExtremesSink, FramePair, Plan, RgbSink, Sc
 
 /// The byte scales of both channels for a `Scaling`, running the engine
 /// once over the pair first when the mode needs the frame's extremes.
+#[inline(always)]
 pub fn byte_scales<const COLS: usize>(
     engine: &mut Engine<COLS>,
     plan: &Plan<COLS>,
@@ -23,6 +24,7 @@ pub fn byte_scales<const COLS: usize>(
 /// Write the RGB8 representation of `frames` into `rgb` (`3 · W · H` bytes,
 /// row-major), and hand every pixel to `also` as well (use `()` for
 /// nothing). `PerFrameMinMax` runs the engine twice, `Fixed` once.
+#[inline(always)]
 pub fn represent<const COLS: usize, S: Sink>(
     engine: &mut Engine<COLS>,
     plan: &Plan<COLS>,

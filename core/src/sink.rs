@@ -92,6 +92,7 @@ fn write_plane<T: Copy>(
 }
 
 impl Sink for FieldSink<'_> {
+    #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let (p, w) = (&mut self.planes, self.width);
         write_plane(&mut p.v_c_x, w, y, x, pixels, |px| px.v_c[0]);
@@ -138,6 +139,7 @@ impl<'a> RgbSink<'a> {
 }
 
 impl Sink for RgbSink<'_> {
+    #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let out = segment(self.rgb, self.width, 3, y, x, pixels.len());
         for (dst, px) in out.chunks_exact_mut(3).zip(pixels) {
@@ -157,6 +159,7 @@ pub struct ExtremesSink {
 }
 
 impl Sink for ExtremesSink {
+    #[inline(always)]
     fn row(&mut self, _y: usize, _x: usize, pixels: &[FlowPixel]) {
         for px in pixels {
             self.m_d.add(px.m_d);

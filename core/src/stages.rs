@@ -125,6 +125,7 @@ pub type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T; COLS])
 /// `Kby3 = [−1 0 1]ᵀ⊗[1 4 1]`, `Box⋆Soby = [−1 −1 0 1 1]ᵀ⊗[1 3 4 3 1]`:
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
+#[inline(always)]
 pub fn boundary_minus_domain<const COLS: usize>(
     d: [&[i16; COLS]; 5],
     vert: &mut [[i16; COLS]; 4],
@@ -164,6 +165,7 @@ pub fn boundary_minus_domain<const COLS: usize>(
 }
 
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five `E` rows centred on it.
+#[inline(always)]
 pub fn smooth<const COLS: usize>(
     e: [[&[i32; COLS]; 5]; 2],
     vert: &mut [[i32; COLS]; 2],
@@ -204,6 +206,7 @@ pub struct Products<const COLS: usize> {
 
 /// The five products `X², XY, Y²` and `X·Dn, Y·Dn` on `[5, n−5)`, then their
 /// horizontal `G` on `[7, n−7)` into one row of each sum ring.
+#[inline(always)]
 pub fn structure_row<const COLS: usize>(
     input: &ResidualInputs<'_, COLS>,
     products: &mut Products<COLS>,

@@ -11,7 +11,10 @@
 //! Modes:
 //! - `serial`: the core's `represent`, `Engine<142>` in 128-px strips,
 //!   `Fixed` gains (one engine pass, as when streaming), one thread;
-//! - `serial-minmax`: the same with per-frame min–max (two engine passes);
+//! - `serial-portable`: `serial` compiled for the baseline (SSE2 on x86-64)
+//!   whatever the CPU, where `serial` takes the widest instructions the CPU
+//!   has (`reynoldsflow_host::dispatch`);
+//! - `serial-minmax`: `serial` with per-frame min–max (two engine passes);
 //! - `parallel`: the host's `represent_parallel`, `Fixed` gains, over a
 //!   rayon pool of `--threads` built once: the 128-px strips spread over
 //!   the threads, one engine each, bytes straight into the frame.
@@ -24,6 +27,7 @@ use std::time::Instant;
 
 use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::Gray;
+use reynoldsflow_host::dispatch::Isa;
 use reynoldsflow_host::fixed_engine::represent_parallel;
 
 mod common;
@@ -76,13 +80,18 @@ fn computation(
     next: &[u8],
 ) -> Box<dyn FnMut()> {
     match mode {
-        "serial" | "serial-minmax" => {
-            let scaling = if mode == "serial" {
-                FIXED
-            } else {
+        "serial" | "serial-minmax" | "serial-portable" => {
+            let scaling = if mode == "serial-minmax" {
                 Scaling::PerFrameMinMax
+            } else {
+                FIXED
             };
-            Box::new(core_engine::<COLS>(prev, next, (w, h), None, scaling))
+            let isa = if mode == "serial-portable" {
+                Isa::Portable
+            } else {
+                Isa::Best
+            };
+            Box::new(core_engine::<COLS>(isa, prev, next, (w, h), None, scaling))
         }
         "parallel" => {
             let prev = Gray::new(w, h, prev.to_vec()).unwrap();
@@ -96,7 +105,9 @@ fn computation(
                 black_box(out);
             })
         }
-        other => panic!("unknown --mode {other} (serial, serial-minmax, parallel)"),
+        other => {
+            panic!("unknown --mode {other} (serial, serial-portable, serial-minmax, parallel)")
+        }
     }
 }
 
@@ -143,6 +154,7 @@ fn main() {
             let (p, n) = moving_pair(w, h);
             for (mode, threads) in [
                 ("serial", 1),
+                ("serial-portable", 1),
                 ("serial-minmax", 1),
                 ("parallel", 1),
                 ("parallel", 2),

@@ -21,6 +21,8 @@ use reynoldsflow_host::Gray;
 use reynoldsflow_host::fixed_engine::{compute_fixed_one_pass, represent_parallel};
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
 
+use reynoldsflow_host::dispatch::Isa;
+
 mod common;
 use common::{COLS, FIXED, SIZES, core_engine, moving_pair};
 
@@ -36,15 +38,22 @@ fn representation_benches(c: &mut Criterion) {
         if w * h > 320 * 240 {
             group.sample_size(10);
         }
-        let mut run = core_engine::<COLS>(&prev, &next, (w, h), None, FIXED);
+        let mut run = core_engine::<COLS>(Isa::Best, &prev, &next, (w, h), None, FIXED);
         group.bench_function(BenchmarkId::from_parameter("core/strips"), |b| {
             b.iter(&mut run)
         });
-        let mut run = core_engine::<COLS>(&prev, &next, (w, h), None, Scaling::PerFrameMinMax);
+        let mut run = core_engine::<COLS>(
+            Isa::Best,
+            &prev,
+            &next,
+            (w, h),
+            None,
+            Scaling::PerFrameMinMax,
+        );
         group.bench_function(BenchmarkId::from_parameter("core/strips-minmax"), |b| {
             b.iter(&mut run)
         });
-        let mut run = core_engine::<78>(&prev, &next, (w, h), Some((64, 64)), FIXED);
+        let mut run = core_engine::<78>(Isa::Best, &prev, &next, (w, h), Some((64, 64)), FIXED);
         group.bench_function(BenchmarkId::from_parameter("core/tiles-64x64"), |b| {
             b.iter(&mut run)
         });

@@ -7,6 +7,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use reynoldsflow_core::Engine;
 
+use reynoldsflow_host::dispatch::Isa;
+
 mod common;
 use common::{FIXED, core_engine};
 
@@ -24,7 +26,7 @@ fn frame(w: usize, h: usize, t: f64) -> Vec<u8> {
 /// One tile shape: an engine of `COLS` columns computing `tile` tiles.
 fn bench_shape<const COLS: usize>(c: &mut Criterion, w: usize, h: usize, tile: (usize, usize)) {
     let (prev, next) = (frame(w, h, 0.0), frame(w, h, 1.0));
-    let mut run = core_engine::<COLS>(&prev, &next, (w, h), Some(tile), FIXED);
+    let mut run = core_engine::<COLS>(Isa::Best, &prev, &next, (w, h), Some(tile), FIXED);
     let mut group = c.benchmark_group(format!("tiling/{w}x{h}"));
     group.throughput(Throughput::Elements((w * h) as u64));
     let name = format!(

@@ -4,10 +4,11 @@
 
 use rayon::prelude::*;
 use reynoldsflow_core::{
-    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink,
-    represent, rgb,
+    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, RgbSink, Scaling,
+    Sink, rgb,
 };
 
+use crate::dispatch::{self, Isa, Pass};
 use crate::{FlowPlanes, Gray, HostError};
 
 /// Window columns of the host's engine: tiles up to
@@ -91,13 +92,41 @@ fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> Fi
     }
 }
 
+/// The byte scales of both channels; `extremes` is asked for the frame's
+/// extremes only when `scaling` needs them.
+fn byte_scales(
+    scaling: Scaling,
+    extremes: impl FnOnce() -> Result<ExtremesSink, HostError>,
+) -> Result<(ByteScale, ByteScale), HostError> {
+    Ok(match scaling {
+        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
+        Scaling::PerFrameMinMax => {
+            let extremes = extremes()?;
+            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
+        }
+    })
+}
+
 /// Run the core on `(prev, next)` with `params`, in full-height strips as
 /// wide as the engine allows, or in `tile = (width, height)` tiles when
-/// given, the way firmware does: one engine, the core's own
-/// [`represent`] (two passes for per-frame min–max). Fails when the frames
-/// differ in size, or the core refuses the size, the parameters or the
-/// tile (e.g. wider than [`MAX_TILE_WIDTH`]).
+/// given, the way firmware does: one engine, two passes for per-frame
+/// min–max (the core's `represent`), the widest instructions the CPU has.
+/// Fails when the frames differ in size, or the core refuses the size, the
+/// parameters or the tile (e.g. wider than [`MAX_TILE_WIDTH`]).
 pub fn compute_fixed(
+    prev: &Gray,
+    next: &Gray,
+    params: Params,
+    tile: Option<(usize, usize)>,
+    scaling: Scaling,
+) -> Result<FixedOutput, HostError> {
+    compute_fixed_on(Isa::Best, prev, next, params, tile, scaling)
+}
+
+/// [`compute_fixed`] with the engine pass compiled for `isa`: every `isa`
+/// gives the same output, bit for bit.
+pub fn compute_fixed_on(
+    isa: Isa,
     prev: &Gray,
     next: &Gray,
     params: Params,
@@ -108,12 +137,25 @@ pub fn compute_fixed(
     let (width, height) = prev.size();
     // Boxed: the engine is too large to keep on a test thread's stack for long.
     let mut engine = Box::new(HostEngine::new());
+    let (scale_d, scale_c) = byte_scales(scaling, || {
+        let mut extremes = ExtremesSink::default();
+        dispatch::run(isa, &mut engine, &plan, &frames, Pass::All, &mut extremes)?;
+        Ok(extremes)
+    })?;
     let mut pixels = PixelPlane {
         width,
         pixels: vec![FlowPixel::default(); width * height],
     };
     let mut rep = vec![0u8; 3 * width * height];
-    represent(&mut engine, &plan, &frames, scaling, &mut rep, &mut pixels)?;
+    let sink = RgbSink::new(plan.config(), &mut rep, scale_d, scale_c)?;
+    dispatch::run(
+        isa,
+        &mut engine,
+        &plan,
+        &frames,
+        Pass::All,
+        &mut (sink, &mut pixels),
+    )?;
     Ok(output(width, height, &pixels.pixels, rep))
 }
 
@@ -135,15 +177,19 @@ pub fn compute_fixed_one_pass(
         pixels: vec![FlowPixel::default(); width * height],
     };
     let mut engine = Box::new(HostEngine::new());
-    engine.run(&plan, &frames, &mut frame)?;
-    let (scale_d, scale_c) = match scaling {
-        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
-        Scaling::PerFrameMinMax => {
-            let mut extremes = ExtremesSink::default();
-            extremes.row(0, 0, &frame.pixels);
-            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
-        }
-    };
+    dispatch::run(
+        Isa::Best,
+        &mut engine,
+        &plan,
+        &frames,
+        Pass::All,
+        &mut frame,
+    )?;
+    let (scale_d, scale_c) = byte_scales(scaling, || {
+        let mut extremes = ExtremesSink::default();
+        extremes.row(0, 0, &frame.pixels);
+        Ok(extremes)
+    })?;
     let rep = frame
         .pixels
         .iter()
@@ -167,27 +213,29 @@ pub fn represent_parallel(
     let (plan, frames) = prepare(prev, next, params, None)?;
     let (width, height) = prev.size();
     let engine = || Box::new(HostEngine::new());
-    let (scale_d, scale_c) = match scaling {
-        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
-        Scaling::PerFrameMinMax => {
-            let extremes = pool.install(|| {
-                (0..plan.tile_count())
-                    .into_par_iter()
-                    .map_init(engine, |engine, index| {
-                        let mut extremes = ExtremesSink::default();
-                        engine
-                            .run_tile(&plan, &frames, index, &mut extremes)
-                            .map(|()| extremes)
-                    })
-                    .try_reduce(ExtremesSink::default, |mut a, b| {
-                        a.m_d.merge(b.m_d);
-                        a.m_c.merge(b.m_c);
-                        Ok(a)
-                    })
-            })?;
-            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
-        }
-    };
+    let (scale_d, scale_c) = byte_scales(scaling, || {
+        Ok(pool.install(|| {
+            (0..plan.tile_count())
+                .into_par_iter()
+                .map_init(engine, |engine, index| {
+                    let mut extremes = ExtremesSink::default();
+                    dispatch::run(
+                        Isa::Best,
+                        engine,
+                        &plan,
+                        &frames,
+                        Pass::Tile(index),
+                        &mut extremes,
+                    )
+                    .map(|()| extremes)
+                })
+                .try_reduce(ExtremesSink::default, |mut a, b| {
+                    a.m_d.merge(b.m_d);
+                    a.m_c.merge(b.m_c);
+                    Ok(a)
+                })
+        })?)
+    })?;
     let mut rep = vec![0u8; 3 * width * height];
     // Split every row into the strips' column segments.
     let mut strips: Vec<Vec<&mut [u8]>> = (0..plan.tile_count())
@@ -211,7 +259,14 @@ pub fn represent_parallel(
                     scale_d,
                     scale_c,
                 };
-                engine.run_tile(&plan, &frames, index, &mut sink)
+                dispatch::run(
+                    Isa::Best,
+                    engine,
+                    &plan,
+                    &frames,
+                    Pass::Tile(index),
+                    &mut sink,
+                )
             })
     })?;
     Ok(rep)

@@ -18,6 +18,7 @@
 
 pub mod atomic;
 pub mod cli;
+pub mod dispatch;
 mod error;
 pub mod eval;
 pub mod fixed_engine;

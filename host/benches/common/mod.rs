@@ -18,8 +18,9 @@ use reynoldsflow_core::internals::{
     divergence_free_q32, magnitude_q32, q16, smooth, structure_row, vertical_binomial,
 };
 use reynoldsflow_core::{
-    Config, Engine, FlowPixel, FramePair, HALO, Params, Plan, Scaling, Sink, Tile, represent,
+    Config, Engine, FlowPixel, FramePair, HALO, Params, Plan, Scaling, Sink, Tile,
 };
+use reynoldsflow_host::dispatch::{self, Isa, Pass};
 use reynoldsflow_host::fixed_engine::ENGINE_COLS;
 
 /// Window columns of the host engine (strips of 128 output columns).
@@ -35,8 +36,10 @@ pub const FIXED: Scaling = Scaling::Fixed {
 };
 
 /// The core's `represent` with an engine of `N` columns over `tile` tiles
-/// (`None`: full-height strips), one call per run of the closure.
+/// (`None`: full-height strips), compiled for `isa`, one call per run of
+/// the closure.
 pub fn core_engine<const N: usize>(
+    isa: Isa,
     prev: &[u8],
     next: &[u8],
     (w, h): (usize, usize),
@@ -53,15 +56,8 @@ pub fn core_engine<const N: usize>(
     let mut rgb = vec![0u8; 3 * w * h];
     move || {
         let frames = FramePair::packed(&config, &prev, &next).unwrap();
-        represent(
-            &mut engine,
-            &plan,
-            &frames,
-            scaling,
-            black_box(&mut rgb),
-            (),
-        )
-        .unwrap();
+        let pass = Pass::Represent(scaling, black_box(&mut rgb));
+        dispatch::run(isa, &mut engine, &plan, &frames, pass, &mut ()).unwrap();
     }
 }
 
