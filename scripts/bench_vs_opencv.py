@@ -17,6 +17,8 @@ Configurations:
              min-max)
   all cores  DIS with OpenCV's default threads  vs  ours parallel
              (`represent_parallel`, 2 threads)
+  dispatch   ours compiled for the baseline (SSE2) vs ours as dispatched at
+             run time (AVX2 where the CPU has it), one thread, one pass
   scaling    ours parallel 1 thread vs 2 threads at 1280x720
 """
 
@@ -161,6 +163,8 @@ def main():
         ab("1 thread", size, ("DIS ultrafast 1t", dis(1)), ("ours serial 1t (1 pass)", ours("serial", 1)))
         ab("1 thread", size, ("DIS ultrafast 1t", dis(1)),
            ("ours serial 1t (min-max, 2 p.)", ours("serial-minmax", 1)))
+        ab("dispatch", size, ("ours portable 1t", ours("serial-portable", 1)),
+           ("ours serial 1t (1 pass)", ours("serial", 1)))
         ab("all cores", size, (f"DIS ultrafast {default_threads}t", dis(default_threads)),
            (f"ours parallel {cores}t", ours("parallel", cores)))
         if (w, h) == (1280, 720):

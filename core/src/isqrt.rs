@@ -27,16 +27,18 @@ pub fn mul(a: u32, b: u32) -> u64 {
 pub const ISQRT_MAX: u64 = (1 << 50) - 1;
 
 /// `⌊√n⌋`, exact for every `n ≤` [`ISQRT_MAX`] (larger `n` are cut to it).
-/// Branch-free: the correction is one step each way, so a pixel costs the
-/// same whichever way its root rounds.
+/// The correction is one step each way, without loops: no data-dependent
+/// branch but the one for zero.
 #[inline]
 pub fn isqrt(n: u64) -> u32 {
+    // Zero is the common case (still parts of a frame): skip the root.
+    if n < 4 {
+        return u32::from(n != 0);
+    }
     let n = n.min(ISQRT_MAX);
-    // m = n'·4^j ∈ [2⁶², 2⁶⁴) for n' = max(n, 4); a = m's top 32 bits, read
-    // as x = a/2³² ∈ [¼, 1). n < 4 is answered at the end.
-    let wide = n.max(4);
-    let shift = wide.leading_zeros() & !1;
-    let a = ((wide << shift) >> 32) as u32;
+    // m = n·4^j ∈ [2⁶², 2⁶⁴); a = m's top 32 bits, read as x = a/2³² ∈ [¼, 1).
+    let shift = n.leading_zeros() & !1;
+    let a = ((n << shift) >> 32) as u32;
     // r ≈ 2³⁰/√x in Q30 ∈ (2³⁰, 2³¹]. One Newton step r·(3 − x·r²)/2, all in
     // 32×32→64 products: r²/2³¹ ≤ 2³¹ (Q29), a·that/2³² ≈ x·r² ≤ 2³¹ (Q29),
     // r·(3·2²⁹ − t)/2³⁰ < 1.5·2³¹ < 2³². Each step squares the relative
@@ -50,9 +52,8 @@ pub fn isqrt(n: u64) -> u32 {
     // √m ≈ a·r/2³⁰, relative error below 2⁻²⁷ (also a's truncation, 2⁻³⁰), so
     // below ¼ absolute for √n < 2²⁵: within one of the floor either way.
     let q = ((mul(a, r) >> 30) >> (shift / 2)) as u32;
-    let q = q - u32::from(mul(q, q) > wide);
-    let q = q + u32::from(mul(q + 1, q + 1) <= wide);
-    core::hint::select_unpredictable(n < 4, u32::from(n != 0), q)
+    let q = q - u32::from(mul(q, q) > n);
+    q + u32::from(mul(q + 1, q + 1) <= n)
 }
 
 #[cfg(test)]
