@@ -43,6 +43,15 @@ struct PixelPlane {
     pixels: Vec<FlowPixel>,
 }
 
+impl PixelPlane {
+    fn new(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            pixels: vec![FlowPixel::default(); width * height],
+        }
+    }
+}
+
 impl Sink for PixelPlane {
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let start = y * self.width + x;
@@ -142,10 +151,7 @@ pub fn compute_fixed_on(
         dispatch::run(isa, &mut engine, &plan, &frames, Pass::All, &mut extremes)?;
         Ok(extremes)
     })?;
-    let mut pixels = PixelPlane {
-        width,
-        pixels: vec![FlowPixel::default(); width * height],
-    };
+    let mut pixels = PixelPlane::new(width, height);
     let mut rep = vec![0u8; 3 * width * height];
     let sink = RgbSink::new(plan.config(), &mut rep, scale_d, scale_c)?;
     dispatch::run(
@@ -172,10 +178,7 @@ pub fn compute_fixed_one_pass(
 ) -> Result<FixedOutput, HostError> {
     let (plan, frames) = prepare(prev, next, params, tile)?;
     let (width, height) = prev.size();
-    let mut frame = PixelPlane {
-        width,
-        pixels: vec![FlowPixel::default(); width * height],
-    };
+    let mut frame = PixelPlane::new(width, height);
     let mut engine = Box::new(HostEngine::new());
     dispatch::run(
         Isa::Best,
