@@ -11,13 +11,9 @@ pub fn byte_scales<const COLS: usize>(
     frames: &FramePair<'_>,
     scaling: Scaling,
 ) -> Result<(ByteScale, ByteScale), Error> {
-    Ok(match scaling {
-        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
-        Scaling::PerFrameMinMax => {
-            let mut extremes = ExtremesSink::default();
-            engine.run(plan, frames, &mut extremes)?;
-            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
-        }
+    scaling.byte_scales(|| {
+        let mut extremes = ExtremesSink::default();
+        engine.run(plan, frames, &mut extremes).map(|()| extremes)
     })
 }
 

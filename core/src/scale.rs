@@ -19,6 +19,22 @@ pub enum Scaling {
     },
 }
 
+impl Scaling {
+    /// The byte maps of `|v_d|` and `|v_c|`; `extremes` is asked for the
+    /// frame's extremes only when the mode needs them (however the caller
+    /// gathers them: an engine pass, kept pixels, parallel strips).
+    #[inline]
+    pub fn byte_scales<E>(
+        self,
+        extremes: impl FnOnce() -> Result<crate::ExtremesSink, E>,
+    ) -> Result<(ByteScale, ByteScale), E> {
+        Ok(match self {
+            Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
+            Scaling::PerFrameMinMax => extremes()?.byte_scales(),
+        })
+    }
+}
+
 /// One channel's map from a Q32.32 magnitude to a byte:
 /// `byte = min(255, ⌊x · gain / 2^frac + ½⌋)` with `x = (m − offset) >> shift`
 /// in integer bits, so that `x · gain / 2^frac = (m − offset) · k`.
@@ -218,7 +234,7 @@ impl PreviousFrameMinMax {
 
     /// The frame is complete: its extremes become the next frame's scales.
     pub fn end_frame(&mut self) {
-        self.scales = (self.seen.m_d.byte_scale(), self.seen.m_c.byte_scale());
+        self.scales = self.seen.byte_scales();
         self.seen = crate::ExtremesSink::default();
     }
 }

@@ -158,6 +158,19 @@ pub struct ExtremesSink {
     pub m_c: Extremes,
 }
 
+impl ExtremesSink {
+    /// Merge the extremes of another part of the frame.
+    pub fn merge(&mut self, other: ExtremesSink) {
+        self.m_d.merge(other.m_d);
+        self.m_c.merge(other.m_c);
+    }
+
+    /// The per-frame min–max byte maps of `|v_d|` and `|v_c|`.
+    pub fn byte_scales(&self) -> (ByteScale, ByteScale) {
+        (self.m_d.byte_scale(), self.m_c.byte_scale())
+    }
+}
+
 impl Sink for ExtremesSink {
     #[inline(always)]
     fn row(&mut self, _y: usize, _x: usize, pixels: &[FlowPixel]) {

@@ -6,6 +6,7 @@
 //! (tested in `tests/tests/simd.rs`).
 
 use multiversion::multiversion;
+use multiversion::target::target_cfg_f;
 use reynoldsflow_core::{Engine, Error, FramePair, Plan, Scaling, Sink};
 
 /// Which compilation of the engine pass runs.
@@ -18,17 +19,6 @@ pub enum Isa {
     Portable,
 }
 
-impl Isa {
-    /// What [`Isa::Best`] runs on this CPU, for reports.
-    pub fn best_name() -> &'static str {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            return "avx2";
-        }
-        "portable"
-    }
-}
-
 /// What one engine call does.
 pub enum Pass<'a> {
     /// Every tile of the plan.
@@ -37,6 +27,25 @@ pub enum Pass<'a> {
     Tile(usize),
     /// The core's `represent` into this RGB frame, in this scaling.
     Represent(Scaling, &'a mut [u8]),
+}
+
+impl Pass<'_> {
+    #[inline(always)]
+    fn run<const COLS: usize, S: Sink>(
+        self,
+        engine: &mut Engine<COLS>,
+        plan: &Plan<COLS>,
+        frames: &FramePair<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        match self {
+            Pass::All => engine.run(plan, frames, sink),
+            Pass::Tile(index) => engine.run_tile(plan, frames, index, sink),
+            Pass::Represent(scaling, rgb) => {
+                reynoldsflow_core::represent(engine, plan, frames, scaling, rgb, sink)
+            }
+        }
+    }
 }
 
 /// Run `pass` of `engine` over `frames` into `sink`, compiled for `isa`.
@@ -50,34 +59,35 @@ pub fn run<const COLS: usize, S: Sink>(
 ) -> Result<(), Error> {
     match isa {
         Isa::Best => run_best(engine, plan, frames, pass, sink),
-        Isa::Portable => run_portable(engine, plan, frames, pass, sink),
+        Isa::Portable => pass.run(engine, plan, frames, sink),
     }
 }
 
-#[multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt+popcnt+fma"))]
-fn run_best<const COLS: usize, S: Sink>(
-    engine: &mut Engine<COLS>,
-    plan: &Plan<COLS>,
-    frames: &FramePair<'_>,
-    pass: Pass<'_>,
-    sink: &mut S,
-) -> Result<(), Error> {
-    run_portable(engine, plan, frames, pass, sink)
+/// The targets of [`Isa::Best`], written once for every function cloned for them.
+macro_rules! best_targets {
+    ($($function:item)*) => {
+        $(#[multiversion(targets("x86_64+avx2+bmi1+bmi2+lzcnt+popcnt+fma"))] $function)*
+    };
 }
 
-#[inline(always)]
-fn run_portable<const COLS: usize, S: Sink>(
-    engine: &mut Engine<COLS>,
-    plan: &Plan<COLS>,
-    frames: &FramePair<'_>,
-    pass: Pass<'_>,
-    sink: &mut S,
-) -> Result<(), Error> {
-    match pass {
-        Pass::All => engine.run(plan, frames, sink),
-        Pass::Tile(index) => engine.run_tile(plan, frames, index, sink),
-        Pass::Represent(scaling, rgb) => {
-            reynoldsflow_core::represent(engine, plan, frames, scaling, rgb, sink)
+best_targets! {
+    fn run_best<const COLS: usize, S: Sink>(
+        engine: &mut Engine<COLS>,
+        plan: &Plan<COLS>,
+        frames: &FramePair<'_>,
+        pass: Pass<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        pass.run(engine, plan, frames, sink)
+    }
+
+    /// What [`Isa::Best`] runs on this CPU, for reports: the clone that
+    /// dispatch selects names itself.
+    pub fn best_name() -> &'static str {
+        if target_cfg_f!(target_feature = "avx2") {
+            "avx2"
+        } else {
+            "portable"
         }
     }
 }

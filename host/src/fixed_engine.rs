@@ -4,8 +4,7 @@
 
 use rayon::prelude::*;
 use reynoldsflow_core::{
-    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, RgbSink, Scaling,
-    Sink, rgb,
+    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, rgb,
 };
 
 use crate::dispatch::{self, Isa, Pass};
@@ -101,21 +100,6 @@ fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> Fi
     }
 }
 
-/// The byte scales of both channels; `extremes` is asked for the frame's
-/// extremes only when `scaling` needs them.
-fn byte_scales(
-    scaling: Scaling,
-    extremes: impl FnOnce() -> Result<ExtremesSink, HostError>,
-) -> Result<(ByteScale, ByteScale), HostError> {
-    Ok(match scaling {
-        Scaling::Fixed { k_d, k_c } => (ByteScale::fixed(k_d), ByteScale::fixed(k_c)),
-        Scaling::PerFrameMinMax => {
-            let extremes = extremes()?;
-            (extremes.m_d.byte_scale(), extremes.m_c.byte_scale())
-        }
-    })
-}
-
 /// Run the core on `(prev, next)` with `params`, in full-height strips as
 /// wide as the engine allows, or in `tile = (width, height)` tiles when
 /// given, the way firmware does: one engine, two passes for per-frame
@@ -146,22 +130,10 @@ pub fn compute_fixed_on(
     let (width, height) = prev.size();
     // Boxed: the engine is too large to keep on a test thread's stack for long.
     let mut engine = Box::new(HostEngine::new());
-    let (scale_d, scale_c) = byte_scales(scaling, || {
-        let mut extremes = ExtremesSink::default();
-        dispatch::run(isa, &mut engine, &plan, &frames, Pass::All, &mut extremes)?;
-        Ok(extremes)
-    })?;
     let mut pixels = PixelPlane::new(width, height);
     let mut rep = vec![0u8; 3 * width * height];
-    let sink = RgbSink::new(plan.config(), &mut rep, scale_d, scale_c)?;
-    dispatch::run(
-        isa,
-        &mut engine,
-        &plan,
-        &frames,
-        Pass::All,
-        &mut (sink, &mut pixels),
-    )?;
+    let pass = Pass::Represent(scaling, &mut rep);
+    dispatch::run(isa, &mut engine, &plan, &frames, pass, &mut pixels)?;
     Ok(output(width, height, &pixels.pixels, rep))
 }
 
@@ -188,10 +160,10 @@ pub fn compute_fixed_one_pass(
         Pass::All,
         &mut frame,
     )?;
-    let (scale_d, scale_c) = byte_scales(scaling, || {
+    let (scale_d, scale_c) = scaling.byte_scales(|| {
         let mut extremes = ExtremesSink::default();
         extremes.row(0, 0, &frame.pixels);
-        Ok(extremes)
+        Ok::<_, HostError>(extremes)
     })?;
     let rep = frame
         .pixels
@@ -216,8 +188,8 @@ pub fn represent_parallel(
     let (plan, frames) = prepare(prev, next, params, None)?;
     let (width, height) = prev.size();
     let engine = || Box::new(HostEngine::new());
-    let (scale_d, scale_c) = byte_scales(scaling, || {
-        Ok(pool.install(|| {
+    let (scale_d, scale_c) = scaling.byte_scales(|| {
+        pool.install(|| {
             (0..plan.tile_count())
                 .into_par_iter()
                 .map_init(engine, |engine, index| {
@@ -233,11 +205,10 @@ pub fn represent_parallel(
                     .map(|()| extremes)
                 })
                 .try_reduce(ExtremesSink::default, |mut a, b| {
-                    a.m_d.merge(b.m_d);
-                    a.m_c.merge(b.m_c);
+                    a.merge(b);
                     Ok(a)
                 })
-        })?)
+        })
     })?;
     let mut rep = vec![0u8; 3 * width * height];
     // Split every row into the strips' column segments.

@@ -8,7 +8,7 @@
 
 use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{IntensityScale, Params, Scaling};
-use reynoldsflow_host::dispatch::Isa;
+use reynoldsflow_host::dispatch::{self, Isa};
 use reynoldsflow_host::fixed_engine::compute_fixed_on;
 use reynoldsflow_host::{Gray, image_io};
 use reynoldsflow_tests::{Pattern, frame_pair, vector_cases, vectors_dir};
@@ -35,7 +35,7 @@ fn same_on_both(
         assert!(
             best == portable,
             "{what}, tile {tile:?}, {scaling:?}: {} and portable differ",
-            Isa::best_name()
+            dispatch::best_name()
         );
     }
 }
@@ -45,10 +45,14 @@ fn the_cpu_has_what_the_suite_requires() {
     let required = std::env::var_os("REYNOLDSFLOW_REQUIRE_AVX2").is_some_and(|v| v == "1");
     println!(
         "engine pass compared: {} against portable",
-        Isa::best_name()
+        dispatch::best_name()
     );
     if required {
-        assert_eq!(Isa::best_name(), "avx2", "AVX2 required but not detected");
+        assert_eq!(
+            dispatch::best_name(),
+            "avx2",
+            "AVX2 required but not detected"
+        );
     }
 }
 
@@ -93,5 +97,8 @@ fn simd_and_portable_agree_on_generated_pairs() {
             pairs += 1;
         }
     }
-    println!("{pairs} generated pairs identical on {}", Isa::best_name());
+    println!(
+        "{pairs} generated pairs identical on {}",
+        dispatch::best_name()
+    );
 }

@@ -40,7 +40,7 @@ fn previous_frame_min_max_uses_the_last_frames_extremes() {
         // The same frame in memory, with the scales spelled out.
         let expected_scales = match previous_extremes {
             None => (first, first),
-            Some(e) => (e.m_d.byte_scale(), e.m_c.byte_scale()),
+            Some(e) => e.byte_scales(),
         };
         assert_eq!((scale_d, scale_c), expected_scales, "frame {k}");
         let mut expected = vec![0u8; 3 * w * h];
