@@ -257,7 +257,7 @@ fn failure_line(item: &Item, why: &str) -> String {
 
 /// Run the subcommand.
 pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
-    let compute = args.engine.compute()?;
+    let compute = args.engine.compute.compute()?;
     let spec = args.output.spec();
     if !spec.writes_anything() {
         return Err(HostError::invalid(
@@ -298,10 +298,10 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
             "{} {:?} scale={:?} s={}/{} lambda={} keep_count={} max_frames={:?}",
             spec.describe(),
             compute.engine(),
-            args.engine.scale,
-            args.engine.intensity_scale.num(),
-            args.engine.intensity_scale.den(),
-            args.engine.lambda,
+            args.engine.compute.scale,
+            args.engine.compute.intensity_scale.num(),
+            args.engine.compute.intensity_scale.den(),
+            args.engine.compute.lambda,
             args.output.keep_count,
             args.output.max_frames
         ),

@@ -4,11 +4,10 @@
 
 use std::path::PathBuf;
 
-use reynoldsflow_core::{Error as CoreError, IntensityScale};
+use reynoldsflow_core::Error as CoreError;
 
-use super::values::{self, EngineKind, ScaleArg, TileSize};
-use crate::outputs::PairFields;
-use crate::{Gray, HostError, atomic, fixed_engine, image_io, npy, pipeline};
+use super::run::ComputeArgs;
+use crate::{HostError, atomic, image_io, npy};
 
 /// Arguments of `reynoldsflow pair`.
 #[derive(Debug, clap::Args)]
@@ -23,35 +22,14 @@ pub struct PairArgs {
     /// vdy.npy (float64, shape (H, W)) and rep.png (RGB8).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Engine: the fixed-point core, or the float64 reference.
-    #[arg(long, value_enum, default_value_t = EngineKind::Fixed)]
-    pub engine: EngineKind,
-    /// Magnitudes to bytes: per-frame min-max, or fixed gains KD (|v_d|)
-    /// and KC (|v_c|); the fixed engine rounds gains to 1/65536.
-    #[arg(long, value_name = "minmax|fixed:KD,KC", default_value = "minmax", value_parser = values::parse_scale)]
-    pub scale: ScaleArg,
-    /// Intensity scale s (f = pixel * s) as an exact ratio or decimal,
-    /// 6144/2^32 <= s <= 1.
-    #[arg(long, value_name = "S", default_value = "1/255", value_parser = values::parse_intensity_scale)]
-    pub intensity_scale: IntensityScale,
-    /// Tikhonov term lambda of the 2x2 solve (the fixed engine rounds it
-    /// to 2^-32).
-    #[arg(long, value_name = "L", default_value = "1e-4", value_parser = values::parse_lambda)]
-    pub lambda: f64,
-    /// Tile size for the fixed engine (width at most 128); default: strips
-    /// of 128 columns. Every tiling gives the same output.
-    #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
-    pub tile: Option<TileSize>,
+    /// The engine and its parameters.
+    #[command(flatten)]
+    pub compute: ComputeArgs,
 }
 
 /// Run the subcommand.
 pub fn run(args: &PairArgs) -> Result<(), HostError> {
-    if args.tile.is_some() && args.engine == EngineKind::Float {
-        return Err(HostError::invalid(
-            "--tile",
-            "only the fixed engine works in tiles; drop --tile or use --engine fixed",
-        ));
-    }
+    let compute = args.compute.compute()?;
     let prev = image_io::read_gray(&args.f0)?;
     let next = image_io::read_gray(&args.f1)?;
     if prev.size() != next.size() {
@@ -62,12 +40,13 @@ pub fn run(args: &PairArgs) -> Result<(), HostError> {
             next: next.size(),
         });
     }
-    let output = match args.engine {
-        EngineKind::Float => {
-            pipeline::float_pair(&prev, &next, args.intensity_scale, args.lambda, args.scale)?
+    let output = compute.pair(&prev, &next).map_err(|e| match e {
+        // What the core refuses of the frames themselves is about the input.
+        HostError::Core(core @ (CoreError::EmptyFrame | CoreError::FrameTooLarge)) => {
+            HostError::invalid(args.f0.display().to_string(), core.to_string())
         }
-        EngineKind::Fixed => run_fixed(args, &prev, &next)?,
-    };
+        e => e,
+    })?;
 
     let p = &output.planes;
     let npy = |data: &[f64]| npy::encode(p.height, p.width, data);
@@ -81,31 +60,4 @@ pub fn run(args: &PairArgs) -> Result<(), HostError> {
         ("rep.png", &png),
     ];
     atomic::write_files(&args.out, &files)
-}
-
-fn run_fixed(args: &PairArgs, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
-    let params = pipeline::core_params(args.intensity_scale, args.lambda)?;
-    let scaling = pipeline::core_scaling(args.scale)?;
-    let tile = args.tile.map(|t| (t.width, t.height));
-    let out = fixed_engine::compute_fixed(prev, next, params, tile, scaling)
-        .map_err(|e| in_context(e, args))?;
-    Ok(PairFields {
-        planes: out.planes,
-        rep: out.rep,
-    })
-}
-
-/// Name the flag or file a core error is about.
-fn in_context(e: HostError, args: &PairArgs) -> HostError {
-    let HostError::Core(core) = e else { return e };
-    let about = match core {
-        CoreError::LambdaOutOfRange => {
-            return pipeline::lambda_range(args.intensity_scale, args.lambda);
-        }
-        CoreError::ScaleOutOfRange => "--intensity-scale".to_owned(),
-        CoreError::TileOutOfFrame | CoreError::TileTooWide { .. } => "--tile".to_owned(),
-        CoreError::EmptyFrame | CoreError::FrameTooLarge => args.f0.display().to_string(),
-        _ => return HostError::Core(core),
-    };
-    HostError::invalid(about, core.to_string())
 }

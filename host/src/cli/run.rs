@@ -34,33 +34,33 @@ Examples:
   reynoldsflow run clip.mp4 --out - --format y4m | ffmpeg -i - -c:v libx264 rep.mp4
       stream the representation into an encoder";
 
-/// The engine and its parameters (shared by `run` and `dataset`).
+/// The engine and its parameters (shared by `pair`, `run` and `dataset`).
 #[derive(Debug, clap::Args)]
 #[command(next_help_heading = "Computation")]
-pub struct EngineArgs {
+pub struct ComputeArgs {
     /// Engine: the fixed-point core, or the float64 reference.
     #[arg(long, value_enum, default_value_t = EngineKind::Fixed)]
     pub engine: EngineKind,
     /// Magnitudes to bytes: per-frame min-max, or fixed gains KD (|v_d|)
-    /// and KC (|v_c|), the same for every frame.
+    /// and KC (|v_c|), the same for every frame; the fixed engine rounds
+    /// gains to 1/65536.
     #[arg(long, value_name = "minmax|fixed:KD,KC", default_value = "minmax", value_parser = values::parse_scale)]
     pub scale: ScaleArg,
-    /// Intensity scale s (f = pixel * s), an exact ratio or decimal.
+    /// Intensity scale s (f = pixel * s) as an exact ratio or decimal,
+    /// 6144/2^32 <= s <= 1.
     #[arg(long, value_name = "S", default_value = "1/255", value_parser = values::parse_intensity_scale)]
     pub intensity_scale: IntensityScale,
-    /// Tikhonov term lambda of the 2x2 solve.
+    /// Tikhonov term lambda of the 2x2 solve (the fixed engine rounds it
+    /// to 2^-32).
     #[arg(long, value_name = "L", default_value = "1e-4", value_parser = values::parse_lambda)]
     pub lambda: f64,
-    /// Tile size for the fixed engine (width at most 128); every tiling
-    /// gives the same output.
+    /// Tile size for the fixed engine (width at most 128); default: strips
+    /// of 128 columns. Every tiling gives the same output.
     #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
     pub tile: Option<TileSize>,
-    /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
-    pub threads: Option<u32>,
 }
 
-impl EngineArgs {
+impl ComputeArgs {
     /// The checked computation.
     pub fn compute(&self) -> Result<Compute, HostError> {
         Compute::new(
@@ -71,7 +71,20 @@ impl EngineArgs {
             self.tile,
         )
     }
+}
 
+/// The computation and how many workers run it (shared by `run` and `dataset`).
+#[derive(Debug, clap::Args)]
+pub struct EngineArgs {
+    /// The engine and its parameters.
+    #[command(flatten)]
+    pub compute: ComputeArgs,
+    /// Worker threads [default: all cores]. The output does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024), help_heading = "Computation")]
+    pub threads: Option<u32>,
+}
+
+impl EngineArgs {
     /// `--threads`, or every core.
     pub fn threads(&self) -> usize {
         self.threads.map_or_else(
@@ -206,7 +219,7 @@ pub fn count(n: usize, unit: &str) -> String {
 
 /// Run the subcommand.
 pub fn run(args: &RunArgs) -> Result<(), HostError> {
-    let compute = args.engine.compute()?;
+    let compute = args.engine.compute.compute()?;
     let spec = args.output.spec();
     let to_stdout = args.out.as_os_str() == "-";
     if !spec.writes_anything() {
