@@ -194,15 +194,7 @@ pub fn represent_parallel(
                 .into_par_iter()
                 .map_init(engine, |engine, index| {
                     let mut extremes = ExtremesSink::default();
-                    dispatch::run(
-                        Isa::Best,
-                        engine,
-                        &plan,
-                        &frames,
-                        Pass::Tile(index),
-                        &mut extremes,
-                    )
-                    .map(|()| extremes)
+                    strip(engine, &plan, &frames, index, &mut extremes).map(|()| extremes)
                 })
                 .try_reduce(ExtremesSink::default, |mut a, b| {
                     a.merge(b);
@@ -233,17 +225,21 @@ pub fn represent_parallel(
                     scale_d,
                     scale_c,
                 };
-                dispatch::run(
-                    Isa::Best,
-                    engine,
-                    &plan,
-                    &frames,
-                    Pass::Tile(index),
-                    &mut sink,
-                )
+                strip(engine, &plan, &frames, index, &mut sink)
             })
     })?;
     Ok(rep)
+}
+
+/// Strip `index` of `plan` into `sink`, with the CPU's widest instructions.
+fn strip<S: Sink>(
+    engine: &mut HostEngine,
+    plan: &Plan<ENGINE_COLS>,
+    frames: &FramePair<'_>,
+    index: usize,
+    sink: &mut S,
+) -> Result<(), reynoldsflow_core::Error> {
+    dispatch::run(Isa::Best, engine, plan, frames, Pass::Tile(index), sink)
 }
 
 /// One full-height strip's segments of the RGB rows (row `y` of the frame is
