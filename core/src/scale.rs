@@ -23,7 +23,7 @@ impl Scaling {
     /// The byte maps of `|v_d|` and `|v_c|`; `extremes` is asked for the
     /// frame's extremes only when the mode needs them (however the caller
     /// gathers them: an engine pass, kept pixels, parallel strips).
-    #[inline]
+    #[inline(always)]
     pub fn byte_scales<E>(
         self,
         extremes: impl FnOnce() -> Result<crate::ExtremesSink, E>,
