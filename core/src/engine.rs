@@ -13,10 +13,13 @@
 use fixed::types::{I16F16, U32F32};
 
 use crate::ring::RowRing;
-use crate::solve::StructureSums;
-use crate::solve::{curl_free_q32, divergence_free_q32, magnitude_q32, q16};
+use crate::solve::{
+    StructureSums, curl_free_magnitude_q32, curl_free_q16, divergence_free_magnitude_q32,
+    divergence_free_q16, solve,
+};
 use crate::stages::{
-    Products, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
+    CHANNELS, Products, ResidualInputs, boundary_minus_domain, smooth, structure_row,
+    vertical_binomial,
 };
 use crate::{Config, Error, FramePair, Plan, Tile};
 
@@ -24,17 +27,22 @@ use crate::{Config, Error, FramePair, Plan, Tile};
 pub const HALO: usize = 7;
 
 /// Everything the representation knows about one pixel.
+///
+/// The fields are computed only for sinks that ask for them
+/// ([`Sink::FIELDS`]); for the others they are zero.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlowPixel {
-    /// Curl-free field `v_c` (x, y), pixels, Q16.16 (saturating).
+    /// Curl-free field `v_c` (x, y), pixels, Q16.16, to nearest.
     pub v_c: [I16F16; 2],
-    /// Divergence-free field `v_d` (x, y), pixels, Q16.16 (saturating).
+    /// Divergence-free field `v_d` (x, y), pixels, Q16.16, to nearest
+    /// (saturating at ±32 768 px).
     pub v_d: [I16F16; 2],
-    /// `|v_c|`, Q32.32, from the components before their rounding to Q16.16
-    /// (so per-frame min–max keeps its precision on small motions).
+    /// `|v_c|`, Q32.32, from the exact `V` (relative error below 2⁻²¹,
+    /// so per-frame min–max keeps its precision on small motions).
     pub m_c: U32F32,
-    /// `|v_d|`, likewise.
+    /// `|v_d|`, Q32.32, from the solve's numerators before any rounding
+    /// (relative error below 2⁻²⁰; saturating at 65 536 px).
     pub m_d: U32F32,
     /// The pixel of `fⁿ` (the representation's B channel).
     pub luma: u8,
@@ -53,11 +61,18 @@ impl FlowPixel {
 /// Where output goes: one call per output row of a tile, in top-to-bottom
 /// order within the tile.
 pub trait Sink {
+    /// Whether this sink reads `v_c` and `v_d` (the magnitudes and the
+    /// luma are always there). A sink that only makes bytes or extremes says
+    /// `false`, and the engine skips the fields' conversions.
+    const FIELDS: bool = true;
+
     /// Pixels `[x, x + pixels.len())` of frame row `y`.
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]);
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
+    const FIELDS: bool = S::FIELDS;
+
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         (**self).row(y, x, pixels)
@@ -66,11 +81,15 @@ impl<S: Sink + ?Sized> Sink for &mut S {
 
 /// The sink that does nothing.
 impl Sink for () {
+    const FIELDS: bool = false;
+
     fn row(&mut self, _y: usize, _x: usize, _pixels: &[FlowPixel]) {}
 }
 
 /// Both sinks see every row.
 impl<A: Sink, B: Sink> Sink for (A, B) {
+    const FIELDS: bool = A::FIELDS || B::FIELDS;
+
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         self.0.row(y, x, pixels);
@@ -98,9 +117,8 @@ pub(crate) struct Window {
 #[repr(C)]
 pub struct Engine<const COLS: usize> {
     window: Window,
-    sums_wide: [RowRing<i64, COLS, 5>; 2],
     products: Products<COLS>,
-    sums_small: [RowRing<i32, COLS, 5>; 3],
+    sums: [RowRing<i32, COLS, 5>; CHANNELS],
     e: [RowRing<i32, COLS, 5>; 2],
     v: [RowRing<i32, COLS, 4>; 2],
     vert_e: [[i32; COLS]; 2],
@@ -129,13 +147,11 @@ impl<const COLS: usize> Engine<COLS> {
             d: RowRing::new(0),
             e: [RowRing::new(0), RowRing::new(0)],
             v: [RowRing::new(0), RowRing::new(0)],
-            sums_small: [RowRing::new(0), RowRing::new(0), RowRing::new(0)],
-            sums_wide: [RowRing::new(0), RowRing::new(0)],
+            sums: [const { RowRing::new(0) }; CHANNELS],
             vert_d: [[0; COLS]; 4],
             vert_e: [[0; COLS]; 2],
             products: Products {
-                small: [[0; COLS]; 3],
-                wide: [[0; COLS]; 2],
+                rows: [[0; COLS]; CHANNELS],
             },
             out: [FlowPixel::ZERO; COLS],
             window: Window {
@@ -251,17 +267,10 @@ impl<const COLS: usize> Engine<COLS> {
                 p0: self.p0.rows(j - 1),
                 d: self.d.row(j),
                 kappa: config.kappa,
+                shift: config.dn_shift,
             };
-            let [sa, sb, sc] = &mut self.sums_small;
-            let [sp, sq] = &mut self.sums_wide;
-            let small = [sa.row_mut(j), sb.row_mut(j), sc.row_mut(j)];
-            structure_row(
-                &input,
-                &mut self.products,
-                small,
-                [sp.row_mut(j), sq.row_mut(j)],
-                n,
-            );
+            let sums = self.sums.each_mut().map(|ring| ring.row_mut(j));
+            structure_row(&input, &mut self.products, sums, n);
         }
         if t >= 2 * HALO {
             self.emit(config, t - HALO, sink);
@@ -269,7 +278,8 @@ impl<const COLS: usize> Engine<COLS> {
     }
 
     /// Solve and hand over output row `o` (window rows; `o ≥ 7`).
-    #[inline(always)]
+    #[cfg_attr(feature = "profile", inline(never))]
+    #[cfg_attr(not(feature = "profile"), inline(always))]
     fn emit<S: Sink>(&mut self, config: &Config, o: usize, sink: &mut S) {
         let Window {
             x_first,
@@ -277,16 +287,11 @@ impl<const COLS: usize> Engine<COLS> {
             y_first,
             ..
         } = self.window;
-        // The vertical G of the five sums, into the product rows (free now).
-        let Products { small, wide } = &mut self.products;
-        for (ring, out) in self.sums_small.iter().zip(small.iter_mut()) {
+        // The vertical G of the seven sums, into the product rows (free now).
+        for (ring, out) in self.sums.iter().zip(self.products.rows.iter_mut()) {
             vertical_binomial(ring.rows(o - 2), out, n, HALO);
         }
-        for (ring, out) in self.sums_wide.iter().zip(wide.iter_mut()) {
-            vertical_binomial(ring.rows(o - 2), out, n, HALO);
-        }
-        let [a, b, c] = small;
-        let [p, q] = wide;
+        let [a, b, c, ph, pl, qh, ql] = &self.products.rows;
         let (vx, vy, luma) = (self.v[0].row(o), self.v[1].row(o), self.p0.row(o));
         let width = n.saturating_sub(2 * HALO);
         let cols = (HALO..(HALO + width).min(COLS)).zip(self.out.iter_mut());
@@ -295,22 +300,23 @@ impl<const COLS: usize> Engine<COLS> {
                 a: a[i],
                 b: b[i],
                 c: c[i],
-                p: p[i],
-                q: q[i],
+                p: [ph[i], pl[i]],
+                q: [qh[i], ql[i]],
             };
-            let v_d = divergence_free_q32(config, sums);
-            let v_c = [curl_free_q32(config, vx[i]), curl_free_q32(config, vy[i])];
+            let solved = solve(config, sums);
+            let v = [vx[i], vy[i]];
+            let (v_c, v_d) = match S::FIELDS {
+                true => (
+                    v.map(|v| curl_free_q16(config, v)),
+                    divergence_free_q16(config, &solved),
+                ),
+                false => ([0; 2], [0; 2]),
+            };
             *out = FlowPixel {
-                v_c: [
-                    I16F16::from_bits(q16(v_c[0])),
-                    I16F16::from_bits(q16(v_c[1])),
-                ],
-                v_d: [
-                    I16F16::from_bits(q16(v_d[0])),
-                    I16F16::from_bits(q16(v_d[1])),
-                ],
-                m_c: U32F32::from_bits(magnitude_q32(v_c)),
-                m_d: U32F32::from_bits(magnitude_q32(v_d)),
+                v_c: v_c.map(I16F16::from_bits),
+                v_d: v_d.map(I16F16::from_bits),
+                m_c: U32F32::from_bits(curl_free_magnitude_q32(config, v)),
+                m_d: U32F32::from_bits(divergence_free_magnitude_q32(config, &solved)),
                 luma: luma[i],
             };
         }
@@ -324,7 +330,8 @@ impl<const COLS: usize> Engine<COLS> {
 
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the
 /// frame (SPEC §2), as `p0` and `d = p1 − p0`.
-#[inline(always)]
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
 fn load_row<const COLS: usize>(
     prev: &[u8],
     next: &[u8],
@@ -372,10 +379,10 @@ fn load_row<const COLS: usize>(
 
 /// Working bytes of an `Engine<cols>`, for choosing `COLS` at run time
 /// (budgets, the `budget` command): equal to `Engine::<cols>::WORKING_BYTES`.
-/// Per window column: the sums' rings (2 × 5 × 8 and 3 × 5 × 4 bytes), the
-/// product rows (2 × 8 + 3 × 4), the rings of `E` (2 × 5 × 4) and `V`
-/// (2 × 4 × 4), the vertical parts (2 × 4 + 4 × 2), the output pixel (40),
-/// and the rings of `d` (6 × 2) and `p0` (8 × 1): 316 bytes.
+/// Per window column: the product rows (7 × 4 bytes), the sums' rings
+/// (7 × 5 × 4), the rings of `E` (2 × 5 × 4) and `V` (2 × 4 × 4), the
+/// vertical parts (2 × 4 + 4 × 2), the output pixel (40), and the rings of
+/// `d` (6 × 2) and `p0` (8 × 1): 316 bytes.
 pub const fn working_bytes(cols: usize) -> usize {
     use core::mem::{align_of, size_of};
     // repr(C): each field at the next multiple of its alignment, in order.
@@ -383,9 +390,7 @@ pub const fn working_bytes(cols: usize) -> usize {
         offset.next_multiple_of(align) + size
     }
     let mut end = size_of::<Window>();
-    end = field(end, 2 * 5 * 8 * cols, 8);
-    end = field(end, (2 * 8 * cols + 3 * 4 * cols).next_multiple_of(8), 8);
-    end = field(end, (3 * 5 + 2 * 5 + 2 * 4 + 2) * 4 * cols, 4);
+    end = field(end, (7 + 7 * 5 + 2 * 5 + 2 * 4 + 2) * 4 * cols, 4);
     end = field(end, size_of::<FlowPixel>() * cols, align_of::<FlowPixel>());
     end = field(end, (6 + 4) * 2 * cols, 2);
     end = field(end, 8 * cols, 1);

@@ -63,16 +63,3 @@ pub use represent::{byte_scales, represent};
 pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
 pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb};
 pub use stream::RowStream;
-
-/// The per-stage kernels and per-pixel arithmetic, for benches and
-/// profiling only (feature `internals`): not a stable API.
-#[cfg(feature = "internals")]
-#[doc(hidden)]
-pub mod internals {
-    pub use crate::isqrt::{isqrt, mul};
-    pub use crate::reciprocal::{reciprocal, reciprocal_by_newton};
-    pub use crate::solve::{StructureSums, curl_free_q32, divergence_free_q32, magnitude_q32, q16};
-    pub use crate::stages::{
-        Products, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
-    };
-}

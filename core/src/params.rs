@@ -6,15 +6,17 @@
 //!
 //! | SPEC | integer form | factor |
 //! |---|---|---|
-//! | `v_c`, `v_d` | `V`, `N/det` | `s / 768` |
+//! | `v_c` | `V` | `s / 768` |
 //! | `D` (residual) | `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q` | `s² / 6144`, with `κ = 6144 / s` |
+//! | `D`, as summed | `Dn′ = round(Dn / 2^σ)` | `2^σ · s² / 6144` |
 //! | `a, b, c` | `A = G256 ⋆ X²`, … | `s² / 16384` |
-//! | `λ` | `Λ8 = 8 · λ · 16384 / s²` | `s² / 131072` |
+//! | `λ` | `Λ4 = 4 · λ · 16384 / s²` | `s² / 65536` |
+//! | `v_d` | `N / det` (see `solve`) | `2^σ · s / 192` |
 //!
 //! Derived once in [`Config::new`], so the per-pixel path only multiplies
-//! and shifts. Only the integer rounding of `κ` and `Λ8` and the 32-bit
-//! mantissa of `s / 768` depend on `s` and `λ`; at the default `s = 1/255`,
-//! `κ = 1 566 720` is exact.
+//! and shifts. Only the integer rounding of `κ` and `Λ4`, the shift `σ` and
+//! the 32-bit mantissas of `s / 768` and `s / 192` depend on `s` and `λ`; at
+//! the default `s = 1/255`, `κ = 1 566 720` is exact and `σ = 8`.
 
 use fixed::types::U32F32;
 
@@ -73,7 +75,7 @@ pub struct Params {
     /// `f = pixel · s`.
     pub scale: IntensityScale,
     /// `λ` in units of `f²` per px², as an unsigned Q32.32. [`Config::new`]
-    /// needs `1 ≤ Λ8 < 2³¹` for `Λ8 = round(131072 · λ / s²)`: at the
+    /// needs `1 ≤ Λ4 < 2³⁰` for `Λ4 = round(65536 · λ / s²)`: at the
     /// default scale any λ from 2⁻³² up to 0.25; the upper end shrinks with
     /// `s²`, so very small scales need very small λ.
     pub lambda: U32F32,
@@ -107,12 +109,53 @@ pub struct Config {
     params: Params,
     /// `κ = round(6144 / s) ∈ [6144, 2³²]`.
     pub(crate) kappa: i64,
-    /// `Λ8 = round(131072 · λ / s²) ∈ [1, 2³¹)`: λ in eighths of the `A` unit.
-    pub(crate) lambda8: u32,
-    /// `s · 2¹⁶ / 768 ≈ c_mant · 2^−c_exp`, `c_mant ∈ [2³¹, 2³²)`: turns `V`
-    /// and `N/det` into Q16.16 pixels.
-    pub(crate) c_mant: u32,
-    pub(crate) c_exp: u32,
+    /// `Λ4 = round(65536 · λ / s²) ∈ [1, 2³⁰)`: λ in quarters of the `A` unit.
+    pub(crate) lambda4: i32,
+    /// `σ`: `Dn` is summed as `Dn′ = round(Dn / 2^σ)`, the smallest shift
+    /// that keeps `|Dn′| ≤ 2²⁷` for every input ([`residual_shift`]).
+    pub(crate) dn_shift: u32,
+    /// `s · 2¹⁶ / 768 ≈ c.mant · 2^−c.exp`: turns `V` into Q16.16 pixels.
+    pub(crate) c: Mantissa,
+    /// `s / 192 ≈ k.mant · 2^−k.exp`: turns `N / det · 2^σ` into pixels.
+    pub(crate) k: Mantissa,
+}
+
+/// A positive constant as `mant · 2^−exp` with `mant ∈ [2³¹, 2³²)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub(crate) struct Mantissa {
+    pub(crate) mant: u32,
+    pub(crate) exp: u32,
+}
+
+impl Mantissa {
+    /// `num / den` (both below 2⁴⁰), normalised, truncated: relative error < 2⁻³¹.
+    fn of(num: u128, den: u128) -> Self {
+        let mut exp = 31u32;
+        while (num << exp) / den >= 1 << 32 {
+            exp -= 1;
+        }
+        while (num << exp) / den < 1 << 31 {
+            exp += 1;
+        }
+        Self {
+            mant: ((num << exp) / den) as u32,
+            exp,
+        }
+    }
+}
+
+/// Largest `|X·Vx + Y·Vy| + |4·p0·Q|` over all inputs: `1020 · (2 · 6 854 400 +
+/// 16 144 560)`, from the L1 norms of the linear maps `d → V` (each component
+/// 255 · 26 880) and `d → Q` (255 · 63 312) and `|X|, |Y|, 4·p0 ≤ 1020`.
+pub(crate) const DN_BOUND_WITHOUT_KAPPA: u64 = 1020 * (2 * 6_854_400 + 16_144_560);
+
+/// `σ` for a given `κ`: the least shift with `|Dn| ≤ 255·κ + DN_BOUND_WITHOUT_KAPPA
+/// < 2^(27 + σ)`, so `|Dn′| = |round(Dn / 2^σ)| ≤ 2²⁷`. It is 8 for every
+/// `s ≥ 1/1024` and at most 14 (κ ≤ 2³²).
+pub(crate) const fn residual_shift(kappa: u64) -> u32 {
+    let bound = 255 * kappa + DN_BOUND_WITHOUT_KAPPA;
+    (u64::BITS - bound.leading_zeros()).saturating_sub(27)
 }
 
 impl Config {
@@ -127,32 +170,26 @@ impl Config {
         let IntensityScale { num, den } = params.scale;
         // `IntensityScale::new` checked the scale; a hand-built value cannot exist.
         let kappa = kappa_of(num, den) as i64;
-        // Λ8 = round(λ_bits · 2⁻³² · 2¹⁷ · den² / num²) = round(λ_bits · den² / (2¹⁵ · num²)).
+        // Λ4 = round(λ_bits · 2⁻³² · 2¹⁶ · den² / num²) = round(λ_bits · den² / (2¹⁶ · num²)).
         let (num, den) = (num as u128, den as u128);
         let lambda_bits = params.lambda.to_bits() as u128;
-        let lambda_den = (num * num) << 15;
-        let lambda8 = (lambda_bits * den * den + lambda_den / 2) / lambda_den;
-        // A8 = 8·A ≤ 2 130 739 200; A8 + Λ8 must stay below 2³².
-        if lambda8 == 0 || lambda8 >= 1 << 31 {
+        let lambda_den = (num * num) << 16;
+        let lambda4 = (lambda_bits * den * den + lambda_den / 2) / lambda_den;
+        // 4·A ≤ 1 065 369 600 < 2³⁰; 4·A + Λ4 must stay below 2³¹ (an i32).
+        if lambda4 == 0 || lambda4 >= 1 << 30 {
             return Err(Error::LambdaOutOfRange);
-        }
-        // c = 256·num / (3·den) ∈ [1.2e-4, 85.4]: find c_exp with c·2^c_exp ∈ [2³¹, 2³²).
-        let (c_num, c_den) = (256 * num, 3 * den);
-        let mut c_exp = 31u32;
-        while (c_num << c_exp) / c_den >= 1 << 32 {
-            c_exp -= 1;
-        }
-        while (c_num << c_exp) / c_den < 1 << 31 {
-            c_exp += 1;
         }
         Ok(Self {
             width: w,
             height: h,
             params,
             kappa,
-            lambda8: lambda8 as u32,
-            c_mant: ((c_num << c_exp) / c_den) as u32,
-            c_exp,
+            lambda4: lambda4 as i32,
+            dn_shift: residual_shift(kappa as u64),
+            // s·2¹⁶/768 = 256·num / (3·den) ∈ [1.2e-4, 85.4].
+            c: Mantissa::of(256 * num, 3 * den),
+            // s/192 = num / (192·den).
+            k: Mantissa::of(num, 192 * den),
         })
     }
 
@@ -180,12 +217,14 @@ mod tests {
     fn default_constants_are_the_exact_integers() {
         let c = Config::new(4, 4, Params::DEFAULT).unwrap();
         assert_eq!(c.kappa, 6144 * 255);
-        // 131072 · 1e-4 · 255² = 852 295.68; λ is 1e-4 to 6e-7.
-        assert_eq!(c.lambda8, 852_296);
-        let c_true = 256.0 / (3.0 * 255.0);
-        let c_fixed = c.c_mant as f64 / (1u64 << c.c_exp) as f64;
-        assert!((c_fixed / c_true - 1.0).abs() < 1e-9);
-        assert!(c.c_mant >= 1 << 31);
+        // 65536 · 1e-4 · 255² = 426 147.84; λ is 1e-4 to 6e-7.
+        assert_eq!(c.lambda4, 426_148);
+        assert_eq!(c.dn_shift, 8);
+        for (m, want) in [(c.c, 256.0 / (3.0 * 255.0)), (c.k, 1.0 / (192.0 * 255.0))] {
+            let got = m.mant as f64 / 2f64.powi(m.exp as i32);
+            assert!((got / want - 1.0).abs() < 1e-9);
+            assert!(m.mant >= 1 << 31);
+        }
     }
 
     #[test]
@@ -221,10 +260,11 @@ mod tests {
             let scale = IntensityScale::new(num, den).unwrap();
             // A λ whose Λ8 is about 1000 at this scale, or the smallest λ.
             let s = f64::from(num) / f64::from(den);
-            let lambda = U32F32::from_num(1000.0 * s * s / 131_072.0).max(U32F32::DELTA);
+            let lambda = U32F32::from_num(1000.0 * s * s / 65_536.0).max(U32F32::DELTA);
             let c = Config::new(1, 1, Params { scale, lambda }).unwrap();
-            assert!(c.c_mant >= 1 << 31, "{num}/{den}");
+            assert!(c.c.mant >= 1 << 31 && c.k.mant >= 1 << 31, "{num}/{den}");
             assert!((6144..=1 << 32).contains(&c.kappa), "{num}/{den}");
+            assert!((8..=14).contains(&c.dn_shift), "{num}/{den}");
         }
     }
 }

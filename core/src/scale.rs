@@ -35,6 +35,9 @@ impl Scaling {
     }
 }
 
+/// The largest min–max range treated as flat: `⌊1e-9 · 2³²⌋ = 4` Q32.32 steps.
+pub const FLAT_RANGE_Q32: u64 = 4;
+
 /// One channel's map from a Q32.32 magnitude to a byte:
 /// `byte = min(255, ⌊x · gain / 2^frac + ½⌋)` with `x = (m − offset) >> shift`
 /// in integer bits, so that `x · gain / 2^frac = (m − offset) · k`.
@@ -81,12 +84,14 @@ impl ByteScale {
     /// Per-frame min–max from the frame's extremes (`min ≤ max`): the range
     /// cut to 32 significant bits, `gain = round(255 · 2⁵² / range) ≥ 2²⁹`, so
     /// the byte differs from the exact formula only within 2⁻²⁰ of a tie.
+    /// A range below 1e-9 px (SPEC §4: residue, not motion; 4 Q32.32 steps
+    /// or fewer) maps every magnitude to 0.
     pub fn min_max(min: U32F32, max: U32F32) -> Self {
         let (lo, hi) = (min.to_bits(), max.to_bits());
         let range = hi.saturating_sub(lo);
         let shift = (u64::BITS - range.leading_zeros()).saturating_sub(32);
         let gain = match range >> shift {
-            0 => 0,
+            _ if range <= FLAT_RANGE_Q32 => 0,
             r => ((255u64 << 52) + r / 2) / r,
         };
         Self::new(lo, shift, gain, 52)
@@ -188,8 +193,11 @@ mod tests {
         }
         let flat = ByteScale::min_max(hi, hi);
         assert_eq!(flat.byte(hi), 0);
-        let tiny = ByteScale::min_max(U32F32::from_bits(7), U32F32::from_bits(8));
-        assert_eq!(tiny.byte(U32F32::from_bits(8)), 255);
+        // Below 1e-9 px of range: flat. Just above: full scale.
+        let residue = ByteScale::min_max(U32F32::from_bits(7), U32F32::from_bits(11));
+        assert_eq!(residue.byte(U32F32::from_bits(11)), 0);
+        let tiny = ByteScale::min_max(U32F32::from_bits(7), U32F32::from_bits(12));
+        assert_eq!(tiny.byte(U32F32::from_bits(12)), 255);
         assert_eq!(tiny.byte(U32F32::from_bits(7)), 0);
         assert_eq!(tiny.byte(U32F32::MAX), 255);
         // A range of 0.01 px keeps full byte precision.

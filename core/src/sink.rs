@@ -139,6 +139,8 @@ impl<'a> RgbSink<'a> {
 }
 
 impl Sink for RgbSink<'_> {
+    const FIELDS: bool = false;
+
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let out = segment(self.rgb, self.width, 3, y, x, pixels.len());
@@ -172,6 +174,8 @@ impl ExtremesSink {
 }
 
 impl Sink for ExtremesSink {
+    const FIELDS: bool = false;
+
     #[inline(always)]
     fn row(&mut self, _y: usize, _x: usize, pixels: &[FlowPixel]) {
         for px in pixels {

@@ -1,58 +1,103 @@
-//! Per-pixel integer arithmetic after the stencils: the fields in Q16.16
-//! pixels, the regularised 2×2 solve (SPEC §3 step 9) and the magnitudes.
+//! Per-pixel integer arithmetic after the stencils: the regularised 2×2
+//! solve (SPEC §3 step 9), the fields in Q16.16 pixels and the magnitudes
+//! in Q32.32 pixels.
 //!
-//! Every routine here is a fixed sequence of integer operations (shifts,
-//! 32×32→64 products, no divide), so every target that computes the same
-//! integers gives the same bytes.
+//! Every routine is a fixed sequence of integer operations on 32-bit
+//! operands with 64-bit products: shifts, multiplies, one exact reciprocal
+//! and exact square roots of integers below 2⁵⁰. Exact floors make the
+//! result independent of how a target computes them (hardware divide,
+//! Newton steps, or an `f64` divide or root, which is exact in that range).
+//!
+//! Formats (`·2^e` marks a per-pixel exponent, a block float):
+//!
+//! | quantity | form | bound |
+//! |---|---|---|
+//! | `a4 = 4A + Λ4`, `c4` | i32 | `4 · 266 342 400 + 2³⁰ < 2³¹` |
+//! | `b4 = 4B` | i32 | `|b4| ≤ √(a4·c4) < 2³⁰·…`, `|4B| ≤ 2³⁰` |
+//! | `det = a4·c4 − b4²` | u64 | `Λ4² ≤ det < 2⁶²` (Cauchy–Schwarz: `B² ≤ AC`) |
+//! | `P = Ph·2¹⁴ + Pl`, `Q` | i64 | `256 · 1020 · 2²⁷ < 2⁴⁵` |
+//! | `P′, Q′ = (P, Q) / 2^τ` toward zero | i32 range | `< 2³¹` |
+//! | `N = (c4·P′ − b4·Q′, a4·Q′ − b4·P′)` | i64 | `< 2⁶² + 2⁶¹` |
+//! | `rd = ⌊(2⁶³−1) / top32(det)⌋` | u32 | `[2³¹, 2³²)`, `1/det ≈ rd · 2^(−31−e)` |
+//! | `r·2^μ = √(x² + y²)`, `r = ⌊√(x′² + y′²)⌋` | u32 | `x′, y′ < 2²⁴`, `r ∈ [2²³, 2^24.5)` |
+//!
+//! `v_d = N · 2^τ / det · 2^σ · s / 192` (see `params`). Relative errors:
+//! `v_d` components about 2⁻²⁹, magnitudes about 2⁻²² (the root's floor at
+//! 23 bits dominates): far inside the tolerances, and the only inexact step
+//! before the sums is `Dn′` (see `stages`).
 
 use crate::Config;
 use crate::isqrt::{isqrt, mul};
 use crate::reciprocal::reciprocal;
 
-/// Fields saturate at ±(2³¹ − 1)·2¹⁶ in Q32.32, so their Q16.16 values fit `I16F16`.
-const FIELD_MAX_Q32: u64 = (i32::MAX as u64) << 16;
+/// Fields saturate at ±(2³¹ − 1) in Q16.16 (±32 768 px), so they fit `I16F16`.
+pub const FIELD_MAX_Q16: u64 = i32::MAX as u64;
 
-/// `floor(mag / 2^shift + 1/2)` for any shift, without overflow.
+/// Magnitudes saturate at 2⁴⁸ − 1 in Q32.32 (65 536 px).
+pub const MAGNITUDE_MAX_Q32: u64 = (1 << 48) - 1;
+
+/// Number of significant bits of `x` (0 for 0).
 #[inline(always)]
-fn round_shift(mag: u64, shift: u32) -> u64 {
-    match shift {
-        0 => mag,
-        // floor((floor(2x) + 1) / 2) = floor(x + 1/2) with x = mag / 2^shift.
-        _ => (mag.checked_shr(shift - 1).unwrap_or(0) + 1) >> 1,
+fn bit_length(x: u64) -> i32 {
+    (u64::BITS - x.leading_zeros()) as i32
+}
+
+/// `prod · 2^shift` rounded to nearest (half up), saturating at `max`.
+#[inline(always)]
+fn scaled(prod: u64, shift: i32, max: u64) -> u64 {
+    if shift >= 0 {
+        let fits = shift < 64 && prod <= max >> shift;
+        return if fits { prod << shift } else { max };
     }
+    // floor((floor(2x) + 1) / 2) = floor(x + 1/2) with x = prod / 2^−shift.
+    let half = prod.checked_shr(shift.unsigned_abs() - 1).unwrap_or(0);
+    ((half + 1) >> 1).min(max)
 }
 
-/// Reapply a sign to a magnitude already limited to [`FIELD_MAX_Q32`].
+/// Reapply a sign to a magnitude of at most `i32::MAX`.
 #[inline(always)]
-fn signed(negative: bool, mag: u64) -> i64 {
-    let mag = mag.min(FIELD_MAX_Q32) as i64;
-    if negative { -mag } else { mag }
+fn signed(negative: bool, mag: u64) -> i32 {
+    let mag = mag as i32;
+    core::hint::select_unpredictable(negative, -mag, mag)
 }
 
-/// A field component from Q32.32 to Q16.16 (`I16F16` bits), to nearest,
-/// half away from zero: `(|v| + 2¹⁵) / 2¹⁶` with `|v|` limited to
-/// [`FIELD_MAX_Q32`], so the result is at most 2³¹ − 1.
+/// `v_c` component in Q16.16 bits from `V` (`|V| ≤ 6 854 400 < 2²³`):
+/// `round(V · s · 2¹⁶ / 768)`, half away from zero. `|V| · c.mant < 2⁵⁵`;
+/// `c.exp ≥ 24`, and the result is below `85.4 · 2²³ < 2³¹`.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn curl_free_q16(config: &Config, v: i32) -> i32 {
+    let prod = mul(v.unsigned_abs(), config.c.mant);
+    signed(v < 0, scaled(prod, -(config.c.exp as i32), FIELD_MAX_Q16))
+}
+
+/// `√(x² + y²) = r · 2^μ`: both cut (or raised) by one shift to 24 bits,
+/// `r = ⌊√(x′² + y′²)⌋ ∈ [2²³, 2^24.5)` (0 for the zero vector), the
+/// radicand below 2⁴⁹. Relative error below 2⁻²² (truncation and floor).
 #[inline(always)]
-pub fn q16(v: i64) -> i32 {
-    let mag = (v.unsigned_abs().min(FIELD_MAX_Q32) + (1 << 15)) >> 16;
-    core::hint::select_unpredictable(v < 0, -(mag as i32), mag as i32)
+pub fn root_of_squares(x: u64, y: u64) -> (u32, i32) {
+    // `& 63`: the zero vector shifts by 0 and stays 0.
+    let lz = (x | y).leading_zeros() & 63;
+    let (x, y) = (((x << lz) >> 40) as u32, ((y << lz) >> 40) as u32);
+    (isqrt(mul(x, x) + mul(y, y)), 64 - lz as i32 - 24)
 }
 
-/// `v_c` in Q32.32 from `V` (units `s/768`, `|V| ≤ 1.02e7 < 2²⁴`):
-/// `round(V · c · 2¹⁶)`, `c = s · 2¹⁶ / 768 < 86`, half away from zero.
-/// `|V| · c_mant < 2²⁴ · 2³² = 2⁵⁶`, shifted by `c_exp − 16 ≥ 8`: below 2⁴⁸.
-/// The shift `c_exp − 16` lies in `[8, 28]` for every admissible `s`, and
-/// `|v_c| < 2⁴⁶` needs no saturation.
-#[inline(always)]
-pub fn curl_free_q32(config: &Config, v: i32) -> i64 {
-    let mag = mul(v.unsigned_abs(), config.c_mant);
-    let shift = config.c_exp - 16;
-    let mag = ((mag + (1 << (shift - 1))) >> shift) as i64;
-    core::hint::select_unpredictable(v < 0, -mag, mag)
+/// `|v_c|` in Q32.32 bits: `r · 2^μ · s / 768` with `r · c.mant < 2⁵⁷`.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn curl_free_magnitude_q32(config: &Config, v: [i32; 2]) -> u64 {
+    let (r, mu) = root_of_squares(u64::from(v[0].unsigned_abs()), u64::from(v[1].unsigned_abs()));
+    // r·2^μ · c.mant·2^(−c.exp) · 2⁻¹⁶ px, times 2³² for Q32.32.
+    scaled(
+        mul(r, config.c.mant),
+        mu + 16 - config.c.exp as i32,
+        MAGNITUDE_MAX_Q32,
+    )
 }
 
-/// The structure sums of one pixel (SPEC §3 step 8), as exact integers:
-/// `a = G256 ⋆ X²` … and `p = G256 ⋆ (X · Dn)` … (formats in `stages`).
+/// The structure sums of one pixel (SPEC §3 step 8), as the engine sums
+/// them (formats in `stages`): `a = G256 ⋆ X²` …, and `p = G256 ⋆ (X · Dn′)`
+/// in two words, `p = p[0] · 2¹⁴ + p[1]`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StructureSums {
     /// `G256 ⋆ X²`: `0 ≤ a ≤ 256 · 1020² = 266 342 400 < 2²⁸`.
@@ -61,195 +106,206 @@ pub struct StructureSums {
     pub b: i32,
     /// `G256 ⋆ Y²`, bounded as `a`.
     pub c: i32,
-    /// `G256 ⋆ (X · Dn)`: `|p| ≤ 256 · 1020 · |Dn| < 2⁵⁹`.
-    pub p: i64,
-    /// `G256 ⋆ (Y · Dn)`, bounded as `p`.
-    pub q: i64,
+    /// `G256 ⋆ (X · h)`, `G256 ⋆ (X · l)` with `Dn′ = h·2¹⁴ + l`: each `≤ 256 · 1020 · 2¹³ < 2³¹`.
+    pub p: [i32; 2],
+    /// `G256 ⋆ (Y · h)`, `G256 ⋆ (Y · l)`, bounded as `p`.
+    pub q: [i32; 2],
 }
 
-/// `v_d` in Q32.32: the solve of `[a+λ, b; b, c+λ] v = [p; q]` (SPEC step 9).
-///
-/// In eighths of the `a` unit (`a8 = 8a`, `Λ8` from [`Config`]) the SPEC's
-/// solution is `v = c · 8 · N / det` (Q16.16) with
-/// `det = (a8+Λ8)(c8+Λ8) − b8²` and `N = (c8+Λ8)·p − b8·q` (x; y alike). Bounds:
-/// - `a8 + Λ8 < 2 130 739 200 + 2³¹ < 2³²`, so `det < 2⁶⁴` in `u64`; `det ≥ Λ8² ≥ 1`
-///   because `b² ≤ a·c` exactly (Cauchy–Schwarz on non-negative weights).
-/// - `p, q` are cut to `|p'|, |q'| < 2³⁰` by one shift `sp` shared by both,
-///   so `|N| < 2³²·2³⁰ + 2³¹·2³⁰ < 2⁶³`.
-/// - `1/det ≈ r · 2^−(31+e)`: `det`'s top 32 bits `d32 ∈ [2³¹, 2³²)` and
-///   `r = ⌊(2⁶³−1)/d32⌋ ∈ [2³¹, 2³²)`, one reciprocal per pixel for both axes.
-/// - `|N|` normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · r < 2⁶³`; its top 31 bits
-///   times `c_mant < 2³²` stay below 2⁶³. Relative error about 2⁻²⁸.
-#[inline(always)]
-pub fn divergence_free_q32(config: &Config, s: StructureSums) -> [i64; 2] {
-    let lambda = config.lambda8;
-    let a8 = (s.a as u32) * 8 + lambda;
-    let c8 = (s.c as u32) * 8 + lambda;
-    // |8b| ≤ 2 130 739 200 < 2³¹.
-    let b8 = i64::from(s.b * 8);
-    let det = mul(a8, c8) - (b8 * b8) as u64;
+/// The solve of one pixel reduced to `v_d = n · rd · 2^exp · s / 192`
+/// pixels: the numerators, the reciprocal of the determinant and one
+/// exponent shared by both components.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Solved {
+    /// `N = (c4·P′ − b4·Q′, a4·Q′ − b4·P′)`, `|N| < 2⁶³`.
+    pub n: [i64; 2],
+    /// `⌊(2⁶³ − 1) / top32(det)⌋ ∈ [2³¹, 2³²)`.
+    pub rd: u32,
+    /// `τ + σ − 31 − bitlen(det)`.
+    pub exp: i32,
+}
 
-    let big = s.p.unsigned_abs().max(s.q.unsigned_abs());
-    let sp = (u64::BITS - big.leading_zeros()).saturating_sub(30);
-    // Truncate toward zero, so the solve stays odd in (p, q): |p'|, |q'| < 2³⁰.
+/// The regularised 2×2 solve `[a+λ, b; b, c+λ] v = [p; q]` up to the
+/// division (bounds in the module table).
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn solve(config: &Config, s: StructureSums) -> Solved {
+    let lambda = config.lambda4;
+    let (a4, c4, b4) = (4 * s.a + lambda, 4 * s.c + lambda, 4 * s.b);
+    let (a4, c4, b4) = (i64::from(a4), i64::from(c4), i64::from(b4));
+    let det = (a4 * c4 - b4 * b4) as u64;
+    let join = |[hi, lo]: [i32; 2]| (i64::from(hi) << 14) + i64::from(lo);
+    let (p, q) = (join(s.p), join(s.q));
+    let tau = (bit_length(p.unsigned_abs() | q.unsigned_abs()) - 31).max(0) as u32;
+    // Toward zero, so the solve stays odd in (p, q).
     let cut = |v: i64| -> i64 {
-        let mag = (v.unsigned_abs() >> sp) as i64;
+        let mag = (v.unsigned_abs() >> tau) as i64;
         if v < 0 { -mag } else { mag }
     };
-    let (p, q) = (cut(s.p), cut(s.q));
-    // c8·p' with c8 < 2³² as one unsigned 32×32 product and a sign.
-    let scaled = |k: u32, v: i64| -> i64 {
-        let mag = mul(k, v.unsigned_abs() as u32) as i64;
-        if v < 0 { -mag } else { mag }
-    };
-    let nx = scaled(c8, p) - b8 * q;
-    let ny = scaled(a8, q) - b8 * p;
-
-    let e = u64::BITS - det.leading_zeros();
-    // det's top 32 bits (`det >> (e − 32)` or `det << (32 − e)`), without a branch.
+    let (p, q) = (cut(p), cut(q));
+    // det's top 32 bits; det ≥ Λ4² ≥ 1, so the shift is below 64.
     let d32 = (det << det.leading_zeros()) >> 32;
-    let r = reciprocal(d32 as u32) as u32;
-    // v = prod · 2^k in Q32.32, k = (bits − 31) + sp + 4 − e − c_exp + 16.
-    let base = sp as i32 + 20 - e as i32 - config.c_exp as i32;
-    let quotient = |n: i64| -> i64 {
-        let mag = n.unsigned_abs();
-        if mag == 0 {
-            return 0;
-        }
-        let bits = (u64::BITS - mag.leading_zeros()) as i32;
-        // `mag >> (bits − 31)` or `mag << (31 − bits)`, without a branch.
-        let n31 = (mag << mag.leading_zeros()) >> 33;
-        let m1 = (mul(n31 as u32, r) >> 32) as u32;
-        let prod = mul(m1, config.c_mant);
-        let k = base + bits - 31;
-        let mag = if k >= 0 {
-            FIELD_MAX_Q32
-        } else {
-            round_shift(prod, k.unsigned_abs())
-        };
-        signed(n < 0, mag)
-    };
-    [quotient(nx), quotient(ny)]
+    Solved {
+        n: [c4 * p - b4 * q, a4 * q - b4 * p],
+        rd: reciprocal(d32 as u32) as u32,
+        exp: tau as i32 + config.dn_shift as i32 - 31 - bit_length(det),
+    }
 }
 
-/// `|v|` in Q32.32 (`U32F32` bits) from Q32.32 components (`|x|, |y| ≤ 2⁴⁷`):
-/// both cut by one shift to below 2²⁴ (the sum of squares then stays below
-/// 2⁴⁹, where the root's seed is within one step of exact), the exact integer
-/// root, shifted back. Relative error below 2⁻²¹.
-#[inline(always)]
-pub fn magnitude_q32(v: [i64; 2]) -> u64 {
-    let [x, y] = [v[0].unsigned_abs(), v[1].unsigned_abs()];
-    let shift = (u64::BITS - (x | y).leading_zeros()).saturating_sub(24);
-    let (x, y) = ((x >> shift) as u32, (y >> shift) as u32);
-    u64::from(isqrt(mul(x, x) + mul(y, y))) << shift
+/// `v_d` (x, y) in Q16.16 bits, to nearest, saturating at ±[`FIELD_MAX_Q16`].
+/// Each numerator normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · rd < 2⁶³`, its
+/// top 31 bits times `k.mant < 2³²` stay below 2⁶³.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn divergence_free_q16(config: &Config, solved: &Solved) -> [i32; 2] {
+    solved.n.map(|n| {
+        let mag = n.unsigned_abs();
+        let lz = mag.leading_zeros() & 63;
+        let n31 = ((mag << lz) >> 33) as u32;
+        let m1 = (mul(n31, solved.rd) >> 32) as u32;
+        // n = n31·2^(b−31); n31·rd ≈ m1·2³²; times 2^exp · k.mant·2^(−k.exp) · 2¹⁶.
+        let shift = (64 - lz as i32) + 17 + solved.exp - config.k.exp as i32;
+        signed(n < 0, scaled(mul(m1, config.k.mant), shift, FIELD_MAX_Q16))
+    })
+}
+
+/// `|v_d|` in Q32.32 bits, from the numerators before any rounding.
+/// `r · rd < 2^56.5`, cut to `m32 < 2^31.5`; `m32 · k.mant < 2^63.5`.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn divergence_free_magnitude_q32(config: &Config, solved: &Solved) -> u64 {
+    let [x, y] = solved.n.map(i64::unsigned_abs);
+    let (r, mu) = root_of_squares(x, y);
+    let m32 = (mul(r, solved.rd) >> 25) as u32;
+    // r·2^μ·rd ≈ m32·2^(25+μ); times 2^exp · k.mant·2^(−k.exp) · 2³².
+    let shift = 25 + mu + solved.exp - config.k.exp as i32 + 32;
+    scaled(mul(m32, config.k.mant), shift, MAGNITUDE_MAX_Q32)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Params;
+    use crate::{IntensityScale, Params};
+    use fixed::types::U32F32;
 
     fn config() -> Config {
         Config::new(8, 8, Params::DEFAULT).unwrap()
     }
 
-    /// The f64 oracle of the solve, in the SPEC's own units, with λ as the
-    /// configuration rounded it (`Λ8`), so only the arithmetic is tested.
-    fn oracle(s: StructureSums) -> [f64; 2] {
-        let sc = 1.0 / 255.0;
+    fn small_scale() -> Config {
+        let scale = IntensityScale::new(1, 1024).unwrap();
+        let lambda = U32F32::from_num(1e-6);
+        Config::new(8, 8, Params { scale, lambda }).unwrap()
+    }
+
+    /// The f64 oracle of the solve in the SPEC's own units, with λ as the
+    /// configuration rounded it (`Λ4`), so only the arithmetic is tested.
+    fn oracle(cfg: &Config, s: StructureSums) -> [f64; 2] {
+        let sc = f64::from(cfg.params().scale.num()) / f64::from(cfg.params().scale.den());
         let ua = sc * sc / 16384.0;
-        let up = sc * sc * sc / (8.0 * 6144.0 * 256.0);
-        let lambda = f64::from(config().lambda8) / 8.0 * ua;
+        let up = 2f64.powi(cfg.dn_shift as i32) * sc * sc * sc / (8.0 * 6144.0 * 256.0);
+        let lambda = f64::from(cfg.lambda4) / 4.0 * ua;
         let (a, b, c) = (
-            s.a as f64 * ua + lambda,
-            s.b as f64 * ua,
-            s.c as f64 * ua + lambda,
+            f64::from(s.a) * ua + lambda,
+            f64::from(s.b) * ua,
+            f64::from(s.c) * ua + lambda,
         );
-        let (p, q) = (s.p as f64 * up, s.q as f64 * up);
+        let join = |[h, l]: [i32; 2]| (f64::from(h) * 16384.0 + f64::from(l)) * up;
+        let (p, q) = (join(s.p), join(s.q));
         let det = a * c - b * b;
         [(c * p - b * q) / det, (a * q - b * p) / det]
     }
 
-    /// The solve's larger component error in Q16 steps, and `|v|` in Q16 steps.
-    fn q16_error(cfg: &Config, s: StructureSums) -> (f64, f64) {
-        let got = divergence_free_q32(cfg, s).map(q16);
-        let want = oracle(s);
+    /// Largest component error in Q16 steps, the magnitude's relative error
+    /// (beyond half a Q32.32 step, the output format's own rounding), and
+    /// `|v|` in Q16 steps.
+    fn errors(cfg: &Config, s: StructureSums) -> (f64, f64, f64) {
+        let solved = solve(cfg, s);
+        let got = divergence_free_q16(cfg, &solved);
+        let want = oracle(cfg, s);
+        let limit = FIELD_MAX_Q16 as f64;
         let err = got.iter().zip(want).fold(0.0f64, |e, (g, w)| {
-            let w16 = (w * 65536.0).clamp(-(i32::MAX as f64), i32::MAX as f64);
-            e.max((*g as f64 - w16).abs())
+            e.max((f64::from(*g) - (w * 65536.0).clamp(-limit, limit)).abs())
         });
-        (err, 65536.0 * want[0].hypot(want[1]))
+        let norm = want[0].hypot(want[1]);
+        let m = divergence_free_magnitude_q32(cfg, &solved) as f64 / 2f64.powi(32);
+        let m_err = if norm * 65536.0 < limit && norm > 0.0 {
+            ((m - norm).abs() - 2f64.powi(-33)).max(0.0) / norm
+        } else {
+            0.0
+        };
+        (err, m_err, 65536.0 * norm)
+    }
+
+    /// Sums built from 25 pixels of gradients and residuals, as the engine
+    /// builds them (so `b² ≤ ac` holds and the words stay in range).
+    fn pixel_sums(seed: &mut u64, gmax: i64, dmax: i64) -> StructureSums {
+        let g = [1i64, 4, 6, 4, 1];
+        let mut next = |range: i64| {
+            *seed ^= *seed << 13;
+            *seed ^= *seed >> 7;
+            *seed ^= *seed << 17;
+            (*seed % (2 * range as u64 + 1)) as i64 - range
+        };
+        let mut s = StructureSums::default();
+        for j in 0..25 {
+            let w = g[j / 5] * g[j % 5];
+            let (x, y, dn) = (next(gmax), next(gmax), next(dmax));
+            let l = (dn << 50) >> 50;
+            let h = (dn - l) >> 14;
+            s.a += (w * x * x) as i32;
+            s.b += (w * x * y) as i32;
+            s.c += (w * y * y) as i32;
+            s.p[0] += (w * x * h) as i32;
+            s.p[1] += (w * x * l) as i32;
+            s.q[0] += (w * y * h) as i32;
+            s.q[1] += (w * y * l) as i32;
+        }
+        s
     }
 
     #[test]
-    fn solve_matches_f64_over_extremes() {
+    fn solve_of_pixel_sums_is_accurate() {
+        for cfg in [config(), small_scale()] {
+            let mut seed = 0x2545_f491_4f6c_dd1du64;
+            let (mut worst, mut worst_m) = (0.0f64, 0.0f64);
+            for case in 0..4000 {
+                let (gmax, dmax) = [
+                    (1020, 1i64 << 27),
+                    (30, 1 << 20),
+                    (3, 1 << 27),
+                    (1020, 1000),
+                    (0, 1 << 27),
+                    (1, 1),
+                ][case % 6];
+                let s = pixel_sums(&mut seed, gmax, dmax);
+                let (err, m_err, norm) = errors(&cfg, s);
+                assert!(err <= 1.0 + 1e-7 * norm, "{s:?}: error {err}");
+                assert!(m_err < 2f64.powi(-20), "{s:?}: magnitude error {m_err}");
+                worst = worst.max(err / norm.max(1.0));
+                worst_m = worst_m.max(m_err);
+            }
+            std::println!("solve: worst {worst:e} of |v|, magnitude {worst_m:e}");
+        }
+    }
+
+    #[test]
+    fn extreme_sums_saturate_or_stay_accurate() {
         let cfg = config();
         let amax = 266_342_400i32;
-        let pmax = (1i64 << 59) - 1;
-        let mut worst = 0.0f64;
-        for a in [0, 1, 1000, 123_456, amax] {
-            for c in [0, 7, 99_999, amax] {
-                let bmax = ((a as f64) * (c as f64)).sqrt() as i64;
-                for b in [-bmax, -bmax / 3, 0, bmax / 2, bmax] {
-                    for p in [-pmax, -12_345_678_901, -1, 0, 1, 987_654_321, pmax] {
-                        for q in [-pmax, -5, 0, 77_777_777_777, pmax] {
-                            let s = StructureSums {
-                                a,
-                                b: b as i32,
-                                c,
-                                p,
-                                q,
-                            };
-                            // p and q share one shift: a component whose own scale is far
-                            // below the other's keeps only |v|'s precision. Sums that come
-                            // from real pixels are tighter (next test).
-                            let (err, norm) = q16_error(&cfg, s);
-                            assert!(err <= 2.0 + 1e-5 * norm, "{s:?}: error {err}");
-                            worst = worst.max(err);
-                        }
+        let wmax = 2_139_095_040i32;
+        for a in [0, 1, 1000, amax] {
+            for c in [0, 7, amax] {
+                let bmax = ((f64::from(a) * f64::from(c)).sqrt()) as i32;
+                for b in [-bmax, 0, bmax / 2, bmax] {
+                    for p in [[-8192 * 261_120, -wmax], [0, 1], [8192 * 261_120, wmax]] {
+                        let s = StructureSums { a, b, c, p, q: [0, -5] };
+                        let (err, _, norm) = errors(&cfg, s);
+                        assert!(err <= 2.0 + 1e-7 * norm, "{s:?}: error {err}");
                     }
                 }
             }
         }
-        std::println!("solve: worst error {worst} Q16 steps");
-    }
-
-    /// Sums built from 25 pixels of gradients and residuals, as the engine
-    /// builds them (so `b² ≤ ac` and `|p| ≤ √(a · Σw·Dn²)` hold).
-    #[test]
-    fn solve_of_pixel_sums_is_accurate() {
-        let cfg = config();
-        let g = [1i64, 4, 6, 4, 1];
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |range: i64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % (2 * range as u64 + 1)) as i64 - range
-        };
-        let mut worst = 0.0f64;
-        for case in 0..2000 {
-            let (gmax, dmax) = [
-                (1020, 1i64 << 40),
-                (30, 1 << 30),
-                (3, 1 << 36),
-                (1020, 1000),
-            ][case % 4];
-            let mut s = StructureSums::default();
-            for j in 0..25 {
-                let w = g[j / 5] * g[j % 5];
-                let (x, y, dn) = (next(gmax), next(gmax), next(dmax));
-                s.a += (w * x * x) as i32;
-                s.b += (w * x * y) as i32;
-                s.c += (w * y * y) as i32;
-                s.p += w * x * dn;
-                s.q += w * y * dn;
-            }
-            let (err, norm) = q16_error(&cfg, s);
-            assert!(err <= 1.0 + 1e-7 * norm, "{s:?}: error {err}");
-            worst = worst.max(err / norm.max(1.0));
-        }
-        std::println!("solve of pixel sums: worst error {worst:e} of |v|");
     }
 
     #[test]
@@ -259,47 +315,55 @@ mod tests {
             a: 5000,
             b: -1200,
             c: 900,
-            p: 123_456_789,
-            q: -987_654,
+            p: [7535, 1234],
+            q: [-60, -4321],
         };
         let neg = StructureSums {
-            p: -s.p,
-            q: -s.q,
+            p: s.p.map(|v| -v),
+            q: s.q.map(|v| -v),
             ..s
         };
-        let [x, y] = divergence_free_q32(&cfg, s);
-        assert_eq!(divergence_free_q32(&cfg, neg), [-x, -y]);
+        let [x, y] = divergence_free_q16(&cfg, &solve(&cfg, s));
+        assert_eq!(divergence_free_q16(&cfg, &solve(&cfg, neg)), [-x, -y]);
         assert!(x != 0 && y != 0);
     }
 
     #[test]
     fn curl_free_conversion_rounds_to_nearest() {
         let cfg = config();
-        for v in [0, 1, -1, 195_840, -195_840, 10_180_000, -10_180_000, 12_345] {
-            let want = (v as f64 * 65536.0 / 195_840.0).round();
-            assert_eq!(q16(curl_free_q32(&cfg, v)) as f64, want, "{v}");
+        for v in [0, 1, -1, 195_840, -195_840, 6_854_400, -6_854_400, 12_345] {
+            let want = (f64::from(v) * 65536.0 / 195_840.0).round();
+            assert_eq!(f64::from(curl_free_q16(&cfg, v)), want, "{v}");
         }
     }
 
     #[test]
-    fn magnitude_is_the_norm_to_2e21() {
-        assert_eq!(magnitude_q32([3 << 32, -(4 << 32)]), 5 << 32);
-        assert_eq!(magnitude_q32([1, 1]), 1);
-        assert_eq!(magnitude_q32([0, 0]), 0);
-        let max = FIELD_MAX_Q32 as i64;
+    fn magnitudes_are_the_norm_to_2e21() {
+        let cfg = config();
+        let unit = 2f64.powi(32) / 195_840.0;
+        assert_eq!(curl_free_magnitude_q32(&cfg, [0, 0]), 0);
         let mut s = 12345u64;
         for case in 0..100_000 {
             s ^= s << 13;
             s ^= s >> 7;
             s ^= s << 17;
-            let x = (s as i64 >> (case % 40 + 16)).clamp(-max, max);
-            let y = ((s >> 7) as i64 >> (case % 23 + 16)).clamp(-max, max);
+            let x = (s as i32 >> (case % 23 + 9)).clamp(-6_854_400, 6_854_400);
+            let y = ((s >> 32) as i32 >> (case % 17 + 9)).clamp(-6_854_400, 6_854_400);
+            let want = f64::from(x).hypot(f64::from(y)) * unit;
+            let got = curl_free_magnitude_q32(&cfg, [x, y]) as f64;
+            assert!((got - want).abs() <= want * 2f64.powi(-21) + 0.5, "{x} {y}");
+        }
+    }
+
+    #[test]
+    fn root_of_squares_keeps_24_bits_at_every_scale() {
+        assert_eq!(root_of_squares(0, 0).0, 0);
+        for (x, y) in [(3u64, 4u64), (1, 1), (1 << 40, 0), (u64::MAX >> 1, 12_345), (7, 1 << 62)] {
+            let (r, mu) = root_of_squares(x, y);
+            let got = f64::from(r) * 2f64.powi(mu);
             let want = (x as f64).hypot(y as f64);
-            let got = magnitude_q32([x, y]) as f64;
-            assert!(
-                got <= want * (1.0 + 1e-12) && got >= want * (1.0 - 2f64.powi(-21)) - 1.0,
-                "{x} {y}"
-            );
+            assert!((got / want - 1.0).abs() < 2f64.powi(-22), "{x} {y}: {got} {want}");
+            assert!(r >= 1 << 23);
         }
     }
 }

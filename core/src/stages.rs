@@ -10,16 +10,23 @@
 //! |---|---|---|
 //! | `d = p1 − p0` | i16 | 255 |
 //! | vertical parts of `Kb3 ⋆ d`, `Box⋆Sob ⋆ d` | i16 | `12 · 255 = 3060` |
-//! | `E = Kb3 ⋆ d − 3 · Box⋆Sob ⋆ d` (`= 3·255·(B − S)`) | i32 | `(12 + 3·48)·255 = 39 780` |
-//! | vertical `G` of `E` | i32 | `16 · 39 780 = 636 480` |
-//! | `V = G256 ⋆ E` (`v_c = V · s/768`) | i32 | `256 · 39 780 = 10 183 680 < 2²⁴` |
-//! | `Q = 1536 · div / s` (central differences) | i32 | `4 · 10 183 680 < 2²⁶` |
+//! | `E = Kb3 ⋆ d − 3 · Box⋆Sob ⋆ d` (`= 3·255·(B − S)`) | i32 | `132 · 255 = 33 660` |
+//! | vertical `G` of `E` | i32 | `16 · 33 660 = 538 560` |
+//! | `V = G256 ⋆ E` (`v_c = V · s/768`) | i32 | `26 880 · 255 = 6 854 400 < 2²³` |
+//! | `Q = 1536 · div / s` (central differences) | i32 | `63 312 · 255 = 16 144 560 < 2²⁴` |
 //! | `X, Y = Sobel ⋆ p0` (`fx = X · s/8`) | i32 | 1020 |
-//! | `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q` (`D = Dn · s²/6144`) | i64 | `2³²·255 + 2.1e10 + 4.2e10 < 2⁴¹` |
+//! | `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q` (`D = Dn · s²/6144`) | i64 | `255·κ + 1020 · 29 853 360 < 2^(27+σ)` |
+//! | `Dn′ = round(Dn / 2^σ) = h·2¹⁴ + l`, `l ∈ [−2¹³, 2¹³)` | i32 | `|Dn′| ≤ 2²⁷`, `|h| ≤ 2¹³` |
 //! | `X², XY, Y²`, then horizontal `G` | i32 | `16 · 1020² < 2²⁴` |
-//! | `X·Dn, Y·Dn`, then horizontal `G` | i64 | `16 · 1020 · 2⁴¹ < 2⁵⁵` |
+//! | `X·h, X·l, Y·h, Y·l`, then horizontal `G` | i32 | `16 · 1020 · 2¹³ < 2²⁷` |
 //! | `a, b, c` (vertical `G`) | i32 | `256 · 1020² < 2²⁸` |
-//! | `p, q` (vertical `G`) | i64 | `256 · 1020 · 2⁴¹ < 2⁵⁹` |
+//! | `p = (p_h, p_l)`, `q` (vertical `G`) | 2 × i32 | `256 · 1020 · 2¹³ = 2 139 095 040 < 2³¹` |
+//!
+//! `V`'s and `Q`'s bounds are the L1 norms of their kernels on `d` times 255.
+//! `Dn′` is the one rounding before the solve: it keeps every later sum in
+//! 32-bit lanes (8 per AVX2 register, one per M4 register), and its error,
+//! at most `2^(σ−1)` against `|κ·d| ≥ 2^(σ+12)` for any temporal change,
+//! stays far inside the SPEC's tolerances (`tests/tests/accuracy.rs`).
 //!
 //! The bounds are worst cases over all inputs (`Dn`'s first term at the
 //! largest admissible `κ`); the tests run with overflow checks on.
@@ -81,7 +88,8 @@ fn columns<T>(row: &mut [T], cols: core::ops::Range<usize>) -> &mut [T] {
 }
 
 /// The vertical binomial of five rows on `[r, n − r)`.
-#[inline(always)]
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn vertical_binomial<T, const COLS: usize>(
     rows: [&[T; COLS]; 5],
     out: &mut [T; COLS],
@@ -125,7 +133,8 @@ pub type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T; COLS])
 /// `Kby3 = [−1 0 1]ᵀ⊗[1 4 1]`, `Box⋆Soby = [−1 −1 0 1 1]ᵀ⊗[1 3 4 3 1]`:
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
-#[inline(always)]
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn boundary_minus_domain<const COLS: usize>(
     d: [&[i16; COLS]; 5],
     vert: &mut [[i16; COLS]; 4],
@@ -165,7 +174,8 @@ pub fn boundary_minus_domain<const COLS: usize>(
 }
 
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five `E` rows centred on it.
-#[inline(always)]
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn smooth<const COLS: usize>(
     e: [[&[i32; COLS]; 5]; 2],
     vert: &mut [[i32; COLS]; 2],
@@ -193,25 +203,29 @@ pub struct ResidualInputs<'a, const COLS: usize> {
     pub d: &'a [i16; COLS],
     /// `κ = 6144 / s` (see `params`).
     pub kappa: i64,
+    /// `σ`: the residual is summed as `round(Dn / 2^σ)` (see `params`).
+    pub shift: u32,
 }
 
-/// Scratch rows of the five structure products (`repr(C)`: see `working_bytes`).
-#[repr(C)]
+/// The seven structure channels, in the order of [`Products::rows`] and the
+/// engine's sum rings: `X², XY, Y², X·h, X·l, Y·h, Y·l`.
+pub const CHANNELS: usize = 7;
+
+/// Scratch rows of the seven structure products.
+#[repr(transparent)]
 pub struct Products<const COLS: usize> {
-    /// `X·Dn`, `Y·Dn`.
-    pub wide: [[i64; COLS]; 2],
-    /// `X²`, `XY`, `Y²`.
-    pub small: [[i32; COLS]; 3],
+    /// One row per channel ([`CHANNELS`]).
+    pub rows: [[i32; COLS]; CHANNELS],
 }
 
-/// The five products `X², XY, Y²` and `X·Dn, Y·Dn` on `[5, n−5)`, then their
-/// horizontal `G` on `[7, n−7)` into one row of each sum ring.
-#[inline(always)]
+/// The seven products on `[5, n−5)`, then their horizontal `G` on
+/// `[7, n−7)` into one row of each sum ring.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn structure_row<const COLS: usize>(
     input: &ResidualInputs<'_, COLS>,
     products: &mut Products<COLS>,
-    sums_small: [&mut [i32; COLS]; 3],
-    sums_wide: [&mut [i64; COLS]; 2],
+    sums: [&mut [i32; COLS]; CHANNELS],
     n: usize,
 ) {
     let ResidualInputs {
@@ -220,9 +234,9 @@ pub fn structure_row<const COLS: usize>(
         p0: [p_up, p_mid, p_down],
         d,
         kappa,
+        shift,
     } = *input;
-    let [xx, xy, yy] = &mut products.small;
-    let [xd, yd] = &mut products.wide;
+    let [xx, xy, yy, xh, xl, yh, yl] = &mut products.rows;
     let cols = span::<COLS>(n, 5);
     let point = |row| points::<i32>(row, cols.clone());
     let three = |row| widened::<u8, 3>(row, cols.clone());
@@ -234,29 +248,35 @@ pub fn structure_row<const COLS: usize>(
         .iter_mut()
         .zip(columns(xy, cols.clone()))
         .zip(columns(yy, cols.clone()))
-        .zip(columns(xd, cols.clone()))
-        .zip(columns(yd, cols.clone()));
+        .zip(columns(xh, cols.clone()))
+        .zip(columns(xl, cols.clone()))
+        .zip(columns(yh, cols.clone()))
+        .zip(columns(yl, cols.clone()));
     for (((([vx_l, vx_c, vx_r], ((&vy_u, &vy_c), &vy_d)), ((pu, pm), pd)), &dd), out) in
         inputs.zip(outputs)
     {
-        let ((((xx, xy), yy), xd), yd) = out;
+        let ((((((xx, xy), yy), xh), xl), yh), yl) = out;
         let q = (vx_r - vx_l) + (vy_d - vy_u);
         let x = (pu[2] - pu[0]) + 2 * (pm[2] - pm[0]) + (pd[2] - pd[0]);
         let y = (pd[0] + 2 * pd[1] + pd[2]) - (pu[0] + 2 * pu[1] + pu[2]);
         let advection = i64::from(x) * i64::from(vx_c) + i64::from(y) * i64::from(vy_c);
         let dilation = i64::from(4 * pm[1]) * i64::from(q);
         let dn = -kappa * i64::from(dd) - advection - dilation;
+        // σ ≥ 8 (params::residual_shift), |Dn′| ≤ 2²⁷.
+        let dn = ((dn + (1 << (shift - 1))) >> shift) as i32;
+        debug_assert!(dn.unsigned_abs() <= 1 << 27, "Dn′ = {dn} beyond 2²⁷");
+        // Dn′ = h·2¹⁴ + l, l ∈ [−2¹³, 2¹³), |h| ≤ 2¹³.
+        let l = (dn << 18) >> 18;
+        let h = (dn - l) >> 14;
         *xx = x * x;
         *xy = x * y;
         *yy = y * y;
-        *xd = i64::from(x) * dn;
-        *yd = i64::from(y) * dn;
+        *xh = x * h;
+        *xl = x * l;
+        *yh = y * h;
+        *yl = y * l;
     }
-    let [sa, sb, sc] = sums_small;
-    let [sp, sq] = sums_wide;
-    horizontal_binomial(xx, sa, n, 7);
-    horizontal_binomial(xy, sb, n, 7);
-    horizontal_binomial(yy, sc, n, 7);
-    horizontal_binomial(xd, sp, n, 7);
-    horizontal_binomial(yd, sq, n, 7);
+    for (row, sum) in products.rows.iter().zip(sums) {
+        horizontal_binomial(row, sum, n, 7);
+    }
 }

@@ -31,7 +31,7 @@ use reynoldsflow_host::dispatch::Isa;
 use reynoldsflow_host::fixed_engine::represent_parallel;
 
 mod common;
-use common::{COLS, FIXED, core_engine, moving_pair, read_pgm};
+use common::{COLS, FIXED, core_engine, moving_pair, read_gray};
 
 struct Options {
     prev: Option<String>,
@@ -136,8 +136,8 @@ fn main() {
     let o = options();
     match (&o.prev, &o.next) {
         (Some(prev), Some(next)) => {
-            let (w, h, p) = read_pgm(prev);
-            let (w2, h2, n) = read_pgm(next);
+            let (w, h, p) = read_gray(prev);
+            let (w2, h2, n) = read_gray(next);
             assert_eq!((w, h), (w2, h2), "frames differ in size");
             let mut run = computation(&o.mode, o.threads, (w, h), &p, &n);
             let times = time(&mut *run, o.warmup, o.min_iters, o.seconds);

@@ -1,22 +1,20 @@
-//! Each stage of the fixed engine apart, for profilers and for A/B builds
-//! (`scripts/profile-stages`): records the real inputs of every stage for a
-//! textured moving pair (checked against the engine), then runs each stage
-//! over every call the host engine makes for the frame, in its own
-//! never-inlined function (`common::run_*`), and the whole engine once
-//! (`engine_pass`: `represent`, `Fixed` gains, one pass).
+//! The fixed engine's pass over a textured moving pair, for profilers and
+//! for A/B builds (`scripts/profile-stages`): `engine_pass` is `represent`
+//! with `Fixed` gains (one pass) over the host engine's strips. Built with
+//! the core's `profile` feature, every stage kernel stays out of line, so
+//! callgrind attributes the pass to the stages as the engine runs them.
 //!
 //! ```text
-//! stage_profile [--size WxH] [--reps N]   # once each: run under callgrind
-//! stage_profile --time [--size WxH]       # ns/px per stage, JSON lines
-//! stage_profile --only NAME [--reps N]    # one stage (or `engine`), for perf stat
+//! stage_profile [--size WxH] [--reps N]   # the pass N times: run under callgrind
+//! stage_profile --time [--size WxH]       # ns/px of the pass, JSON lines
 //! stage_profile --digest                  # hash of every output, all sizes
 //! ```
 //! `--digest` prints an FNV-1a hash of every `FlowPixel` and of the
 //! min–max representation of the textured pair at each bench size: two
 //! builds (e.g. before and after an optimisation of the core) must print
 //! the same lines.
-//! Under callgrind, each `run_*` function's inclusive instruction count
-//! divided by `reps · W · H` is the stage's instructions per pixel.
+//! Under callgrind, each kernel's inclusive instruction count divided by
+//! `reps · W · H` is the stage's instructions per pixel.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -27,7 +25,7 @@ use reynoldsflow_core::{
 };
 
 mod common;
-use common::{COLS, SIZES, Scratch, Stage, Strip, moving_pair};
+use common::{COLS, SIZES, moving_pair};
 
 const FIXED: Scaling = Scaling::Fixed {
     k_d: U16F16::lit("8"),
@@ -100,7 +98,6 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     let (mut w, mut h, mut reps, mut timing) = (640usize, 480usize, 1usize, false);
-    let mut only: Option<String> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -111,58 +108,34 @@ fn main() {
             }
             "--reps" => reps = args.next().and_then(|r| r.parse().ok()).expect("--reps N"),
             "--time" => timing = true,
-            "--only" => only = Some(args.next().expect("--only NAME")),
             "--digest" => return digests(),
             _ => {} // cargo bench's own flags
         }
     }
     let (prev, next) = moving_pair(w, h);
-    let strip = Strip::record(w, h, &prev, &next);
-    let tiles = strip.tiles();
-    let mut scratch = Scratch::new();
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
     let plan = Plan::<COLS>::strips(config).unwrap();
     let frames = FramePair::packed(&config, &prev, &next).unwrap();
     let mut engine = Box::new(Engine::<COLS>::new());
     let mut rgb = vec![0u8; 3 * w * h];
-    let px = (w * h) as f64;
-
     if !timing {
-        let wanted = |name: &str| only.as_deref().is_none_or(|o| name.starts_with(o));
         for _ in 0..reps {
-            for stage in Stage::ALL.into_iter().filter(|s| wanted(s.name())) {
-                stage.run(&strip, &tiles, &mut scratch);
-            }
-            if wanted("engine") {
-                engine_pass(&mut engine, &plan, &frames, &mut rgb);
-            }
+            engine_pass(&mut engine, &plan, &frames, &mut rgb);
         }
         black_box(&rgb);
-        println!("stage_profile {w}x{h}: {reps} rep(s) of every stage and one engine pass each");
+        println!("stage_profile {w}x{h}: {reps} engine pass(es)");
         return;
     }
-
-    // Interleaved rounds, each stage timed over the whole frame; medians.
-    let rounds = 15;
-    let mut times: Vec<Vec<f64>> = vec![Vec::new(); Stage::ALL.len() + 1];
-    for _ in 0..rounds {
-        for (k, stage) in Stage::ALL.into_iter().enumerate() {
+    let px = (w * h) as f64;
+    let times: Vec<f64> = (0..15)
+        .map(|_| {
             let t = Instant::now();
-            stage.run(&strip, &tiles, &mut scratch);
-            times[k].push(t.elapsed().as_secs_f64() * 1e9 / px);
-        }
-        let t = Instant::now();
-        engine_pass(&mut engine, &plan, &frames, &mut rgb);
-        times[Stage::ALL.len()].push(t.elapsed().as_secs_f64() * 1e9 / px);
-    }
-    let names = Stage::ALL
-        .iter()
-        .map(|s| s.name())
-        .chain(["engine (represent, Fixed)"]);
-    for (name, t) in names.zip(times) {
-        println!(
-            "{{\"size\":\"{w}x{h}\",\"stage\":\"{name}\",\"ns_per_px\":{:.4}}}",
-            median(t)
-        );
-    }
+            engine_pass(&mut engine, &plan, &frames, &mut rgb);
+            t.elapsed().as_secs_f64() * 1e9 / px
+        })
+        .collect();
+    println!(
+        "{{\"size\":\"{w}x{h}\",\"stage\":\"engine (represent, Fixed)\",\"ns_per_px\":{:.4}}}",
+        median(times)
+    );
 }

@@ -8,7 +8,7 @@ use reynoldsflow_core::{
     ByteScale, Config, Engine, Error, FieldPlanes, FieldSink, Frame, FramePair, IntensityScale,
     Params, Plan, RgbSink, RowStream, Scaling, represent,
 };
-use reynoldsflow_tests::{Pattern, frame_pair};
+use reynoldsflow_tests::{Pattern, PixelPlane, frame_pair};
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
@@ -57,13 +57,13 @@ proptest! {
     /// the worst frames (saturated steps, noise), or overflow checks fire.
     #[test]
     fn admissible_parameters_never_overflow(
-        num in 1u32..=1000, den_mul in 1u32..=699_050, lambda8_log2 in 0.0f64..31.0,
+        num in 1u32..=1000, den_mul in 1u32..=699_050, lambda4_log2 in 0.0f64..30.0,
         pattern in 0usize..6, w in 1usize..24, h in 1usize..24, seed: u64,
     ) {
         let scale = IntensityScale::new(num, num * den_mul).unwrap();
-        // λ whose Λ8 = 131072·λ/s² spans the admissible [1, 2³¹), where representable.
+        // λ whose Λ4 = 65536·λ/s² spans the admissible [1, 2³⁰), where representable.
         let s = 1.0 / f64::from(den_mul);
-        let lambda = U32F32::from_num(2f64.powf(lambda8_log2) * s * s / 131_072.0).max(U32F32::DELTA);
+        let lambda = U32F32::from_num(2f64.powf(lambda4_log2) * s * s / 65_536.0).max(U32F32::DELTA);
         let params = Params { scale, lambda };
         let config = Config::new(w, h, params);
         prop_assume!(config.is_ok(), "λ not representable at this scale");
@@ -73,7 +73,9 @@ proptest! {
         let plan = Plan::strips(config).unwrap();
         let frames = FramePair::packed(&config, &prev, &next).unwrap();
         let mut rgb = vec![0; w * h * 3];
-        represent(&mut *engine, &plan, &frames, Scaling::PerFrameMinMax, &mut rgb, ()).unwrap();
+        // A sink that reads the fields too, so their conversions run.
+        let mut fields = PixelPlane::new(&config);
+        represent(&mut *engine, &plan, &frames, Scaling::PerFrameMinMax, &mut rgb, &mut fields).unwrap();
     }
 }
 
@@ -97,13 +99,14 @@ fn parameter_extremes_run_on_saturated_frames() {
                 let frames = FramePair::packed(&config, &prev, &next).unwrap();
                 let mut rgb = vec![0; 40 * 30 * 3];
                 let plan = Plan::strips(config).unwrap();
+                let mut fields = PixelPlane::new(&config);
                 represent(
                     &mut *engine,
                     &plan,
                     &frames,
                     Scaling::PerFrameMinMax,
                     &mut rgb,
-                    (),
+                    &mut fields,
                 )
                 .unwrap();
             }
