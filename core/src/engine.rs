@@ -266,7 +266,7 @@ impl<const COLS: usize> Engine<COLS> {
                 vy: self.v[1].rows(j - 1),
                 p0: self.p0.rows(j - 1),
                 d: self.d.row(j),
-                kappa: config.kappa,
+                kappa: config.kappa_split(),
                 shift: config.dn_shift,
             };
             let sums = self.sums.each_mut().map(|ring| ring.row_mut(j));

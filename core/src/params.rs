@@ -193,6 +193,15 @@ impl Config {
         })
     }
 
+    /// `κ = κh·2^σ + κl` as `[κh, κl]`: `255·κh < 2²⁷`, `κl < 2^σ`.
+    pub(crate) const fn kappa_split(&self) -> [i32; 2] {
+        let low = (1i64 << self.dn_shift) - 1;
+        [
+            (self.kappa >> self.dn_shift) as i32,
+            (self.kappa & low) as i32,
+        ]
+    }
+
     /// Frame width in pixels.
     pub const fn width(&self) -> usize {
         self.width as usize

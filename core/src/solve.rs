@@ -86,7 +86,10 @@ pub fn root_of_squares(x: u64, y: u64) -> (u32, i32) {
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn curl_free_magnitude_q32(config: &Config, v: [i32; 2]) -> u64 {
-    let (r, mu) = root_of_squares(u64::from(v[0].unsigned_abs()), u64::from(v[1].unsigned_abs()));
+    let (r, mu) = root_of_squares(
+        u64::from(v[0].unsigned_abs()),
+        u64::from(v[1].unsigned_abs()),
+    );
     // r·2^μ · c.mant·2^(−c.exp) · 2⁻¹⁶ px, times 2³² for Q32.32.
     scaled(
         mul(r, config.c.mant),
@@ -299,7 +302,13 @@ mod tests {
                 let bmax = ((f64::from(a) * f64::from(c)).sqrt()) as i32;
                 for b in [-bmax, 0, bmax / 2, bmax] {
                     for p in [[-8192 * 261_120, -wmax], [0, 1], [8192 * 261_120, wmax]] {
-                        let s = StructureSums { a, b, c, p, q: [0, -5] };
+                        let s = StructureSums {
+                            a,
+                            b,
+                            c,
+                            p,
+                            q: [0, -5],
+                        };
                         let (err, _, norm) = errors(&cfg, s);
                         assert!(err <= 2.0 + 1e-7 * norm, "{s:?}: error {err}");
                     }
@@ -358,11 +367,20 @@ mod tests {
     #[test]
     fn root_of_squares_keeps_24_bits_at_every_scale() {
         assert_eq!(root_of_squares(0, 0).0, 0);
-        for (x, y) in [(3u64, 4u64), (1, 1), (1 << 40, 0), (u64::MAX >> 1, 12_345), (7, 1 << 62)] {
+        for (x, y) in [
+            (3u64, 4u64),
+            (1, 1),
+            (1 << 40, 0),
+            (u64::MAX >> 1, 12_345),
+            (7, 1 << 62),
+        ] {
             let (r, mu) = root_of_squares(x, y);
             let got = f64::from(r) * 2f64.powi(mu);
             let want = (x as f64).hypot(y as f64);
-            assert!((got / want - 1.0).abs() < 2f64.powi(-22), "{x} {y}: {got} {want}");
+            assert!(
+                (got / want - 1.0).abs() < 2f64.powi(-22),
+                "{x} {y}: {got} {want}"
+            );
             assert!(r >= 1 << 23);
         }
     }

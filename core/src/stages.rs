@@ -49,36 +49,52 @@ fn span<const COLS: usize>(n: usize, r: usize) -> core::ops::Range<usize> {
     r..n.min(COLS).saturating_sub(r)
 }
 
-/// The `K`-wide neighbourhoods of columns `cols` of a row (`K` odd), as
-/// arrays. A column range the row cannot serve yields nothing: slices and
-/// windows replace indexing, so the loops have no bounds checks to fail.
+/// The row shifted by `−r … +r` around columns `cols` (`K = 2r + 1`
+/// slices of `cols.len()` elements, slice `k` starting at `cols.start − r + k`).
+/// A column range the row cannot serve gives empty slices: the kernels zip
+/// these slices, which vectorises and leaves no bounds check to fail.
 #[inline(always)]
-fn neighbourhoods<T: Copy + Default, const K: usize>(
+fn shifted<T, const K: usize>(row: &[T], cols: core::ops::Range<usize>) -> [&[T]; K] {
+    let (r, len) = (K / 2, cols.len());
+    let first = cols
+        .start
+        .checked_sub(r)
+        .filter(|_| cols.end + r <= row.len());
+    core::array::from_fn(|k| match first {
+        Some(first) => row.get(first + k..first + k + len).unwrap_or(&[]),
+        None => &[],
+    })
+}
+
+/// The 3-wide neighbourhoods of columns `cols` of a row, as arrays.
+#[inline(always)]
+fn neighbourhoods3<T: Copy>(
     row: &[T],
     cols: core::ops::Range<usize>,
-) -> impl Iterator<Item = [T; K]> + '_ {
-    let (r, start) = (K / 2, cols.start);
-    let src = match start.checked_sub(r) {
-        Some(first) if cols.end > start => row.get(first..cols.end + r).unwrap_or(&[]),
-        _ => &[],
-    };
-    src.windows(K)
-        .map(|w| <[T; K]>::try_from(w).unwrap_or([T::default(); K]))
+) -> impl Iterator<Item = [T; 3]> + '_ {
+    let [a, b, c] = shifted::<T, 3>(row, cols);
+    a.iter().zip(b).zip(c).map(|((&a, &b), &c)| [a, b, c])
+}
+
+/// The 5-wide neighbourhoods of columns `cols` of a row, as arrays.
+#[inline(always)]
+fn neighbourhoods5<T: Copy>(
+    row: &[T],
+    cols: core::ops::Range<usize>,
+) -> impl Iterator<Item = [T; 5]> + '_ {
+    let [a, b, c, d, e] = shifted::<T, 5>(row, cols);
+    a.iter()
+        .zip(b)
+        .zip(c)
+        .zip(d)
+        .zip(e)
+        .map(|((((&a, &b), &c), &d), &e)| [a, b, c, d, e])
 }
 
 /// Columns `cols` of a row, to be read (empty if out of range).
 #[inline(always)]
 fn points<T>(row: &[T], cols: core::ops::Range<usize>) -> core::slice::Iter<'_, T> {
     row.get(cols).unwrap_or(&[]).iter()
-}
-
-/// [`neighbourhoods`] of a narrow row, widened to `i32`.
-#[inline(always)]
-fn widened<T: Copy + Default + Into<i32>, const K: usize>(
-    row: &[T],
-    cols: core::ops::Range<usize>,
-) -> impl Iterator<Item = [i32; K]> + '_ {
-    neighbourhoods::<T, K>(row, cols).map(|w| w.map(Into::into))
 }
 
 /// Columns `cols` of a row, to be written (empty if out of range).
@@ -117,7 +133,7 @@ fn horizontal_binomial<T, const COLS: usize>(
     T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
 {
     let cols = span::<COLS>(n, r.max(2));
-    let taps = neighbourhoods::<T, 5>(row, cols.clone());
+    let taps = neighbourhoods5(row, cols.clone());
     for (o, [a, b, c, d, e]) in columns(out, cols).iter_mut().zip(taps) {
         *o = binomial(a, b, c, d, e);
     }
@@ -158,7 +174,7 @@ pub fn boundary_minus_domain<const COLS: usize>(
     }
     let (ex, ey) = e;
     let cols = span::<COLS>(n, 2);
-    let taps = |v| widened::<i16, 5>(v, cols.clone());
+    let taps = |v| neighbourhoods5(v, cols.clone()).map(|w| w.map(i32::from));
     let parts = taps(v1).zip(taps(v2)).zip(taps(v3)).zip(taps(v4));
     let outs = columns(ex, cols.clone())
         .iter_mut()
@@ -201,8 +217,8 @@ pub struct ResidualInputs<'a, const COLS: usize> {
     pub p0: [&'a [u8; COLS]; 3],
     /// `d = p1 − p0` at the row.
     pub d: &'a [i16; COLS],
-    /// `κ = 6144 / s` (see `params`).
-    pub kappa: i64,
+    /// `κ = 6144 / s` (see `params`) as `κh·2^σ + κl`: `[κh, κl]`.
+    pub kappa: [i32; 2],
     /// `σ`: the residual is summed as `round(Dn / 2^σ)` (see `params`).
     pub shift: u32,
 }
@@ -210,6 +226,33 @@ pub struct ResidualInputs<'a, const COLS: usize> {
 /// The seven structure channels, in the order of [`Products::rows`] and the
 /// engine's sum rings: `X², XY, Y², X·h, X·l, Y·h, Y·l`.
 pub const CHANNELS: usize = 7;
+
+/// `Dn′ = round(Dn / 2^σ)` (half up) of
+/// `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q`, exactly, in 32-bit lanes: with
+/// `κ = κh·2^σ + κl`, `V = Vh·2^σ + Vl`, `Q = Qh·2^σ + Ql` (low parts in
+/// `[0, 2^σ)`), `Dn = H·2^σ + L` and `Dn′ = H + ⌊(L + 2^(σ−1)) / 2^σ⌋`.
+/// Bounds (σ ∈ [8, 14], `255·κ < 2^(27+σ)`): `|κh·d| < 2²⁷`, `|X·Vh| ≤
+/// 1020 · 2¹⁵`, `|4·p0·Qh| ≤ 1020 · 2¹⁶`, so `|H| < 2²⁹`; `|L| ≤ 255 · 2¹⁴ +
+/// 3 · 1020 · 2¹⁴ < 2²⁶`. The result is within `2²⁷` (see `params`).
+#[inline(always)]
+pub fn rounded_residual(
+    kappa: [i32; 2],
+    shift: u32,
+    d: i32,
+    gradient: [i32; 2],
+    v: [i32; 2],
+    p0: i32,
+    q: i32,
+) -> i32 {
+    let low = (1 << shift) - 1;
+    let [x, y] = gradient;
+    let [vx, vy] = v;
+    let high = -kappa[0] * d - x * (vx >> shift) - y * (vy >> shift) - 4 * p0 * (q >> shift);
+    let rest = -kappa[1] * d - x * (vx & low) - y * (vy & low) - 4 * p0 * (q & low);
+    let dn = high + ((rest + (1 << (shift - 1))) >> shift);
+    debug_assert!(dn.unsigned_abs() <= 1 << 27, "Dn′ = {dn} beyond 2²⁷");
+    dn
+}
 
 /// Scratch rows of the seven structure products.
 #[repr(transparent)]
@@ -239,8 +282,8 @@ pub fn structure_row<const COLS: usize>(
     let [xx, xy, yy, xh, xl, yh, yl] = &mut products.rows;
     let cols = span::<COLS>(n, 5);
     let point = |row| points::<i32>(row, cols.clone());
-    let three = |row| widened::<u8, 3>(row, cols.clone());
-    let inputs = neighbourhoods::<i32, 3>(vx, cols.clone())
+    let three = |row| neighbourhoods3(row, cols.clone()).map(|w| w.map(i32::from));
+    let inputs = neighbourhoods3(vx, cols.clone())
         .zip(point(vy_up).zip(point(vy)).zip(point(vy_down)))
         .zip(three(p_up).zip(three(p_mid)).zip(three(p_down)))
         .zip(points(d, cols.clone()));
@@ -259,12 +302,7 @@ pub fn structure_row<const COLS: usize>(
         let q = (vx_r - vx_l) + (vy_d - vy_u);
         let x = (pu[2] - pu[0]) + 2 * (pm[2] - pm[0]) + (pd[2] - pd[0]);
         let y = (pd[0] + 2 * pd[1] + pd[2]) - (pu[0] + 2 * pu[1] + pu[2]);
-        let advection = i64::from(x) * i64::from(vx_c) + i64::from(y) * i64::from(vy_c);
-        let dilation = i64::from(4 * pm[1]) * i64::from(q);
-        let dn = -kappa * i64::from(dd) - advection - dilation;
-        // σ ≥ 8 (params::residual_shift), |Dn′| ≤ 2²⁷.
-        let dn = ((dn + (1 << (shift - 1))) >> shift) as i32;
-        debug_assert!(dn.unsigned_abs() <= 1 << 27, "Dn′ = {dn} beyond 2²⁷");
+        let dn = rounded_residual(kappa, shift, i32::from(dd), [x, y], [vx_c, vy_c], pm[1], q);
         // Dn′ = h·2¹⁴ + l, l ∈ [−2¹³, 2¹³), |h| ≤ 2¹³.
         let l = (dn << 18) >> 18;
         let h = (dn - l) >> 14;
@@ -278,5 +316,49 @@ pub fn structure_row<const COLS: usize>(
     }
     for (row, sum) in products.rows.iter().zip(sums) {
         horizontal_binomial(row, sum, n, 7);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::residual_shift;
+
+    /// The 32-bit form equals rounding the exact 64-bit residual, at every
+    /// shift, on extremes and random admissible inputs.
+    #[test]
+    fn rounded_residual_is_the_rounded_exact_residual() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |range: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % (2 * range as u64 + 1)) as i64 - range
+        };
+        for kappa in [6144u64, 6144 * 255, 6144 * 1024, 1 << 27, 1 << 32] {
+            let shift = residual_shift(kappa);
+            let split = [(kappa >> shift) as i32, (kappa & ((1 << shift) - 1)) as i32];
+            for case in 0..20_000 {
+                let big = case % 4 == 0;
+                let pick = |r: i64, v: i64| if big { v } else { r };
+                let d = pick(next(255), [255, -255][case % 2]);
+                let (x, y) = (next(1020), next(1020));
+                let (vx, vy) = (next(6_854_400), next(6_854_400));
+                let q = pick(next(16_144_560), [16_144_560, -16_144_560][case / 2 % 2]);
+                let p0 = next(127) + 128;
+                let exact = -(kappa as i64) * d - (x * vx + y * vy) - 4 * p0 * q;
+                let want = (exact + (1 << (shift - 1))) >> shift;
+                let got = rounded_residual(
+                    split,
+                    shift,
+                    d as i32,
+                    [x as i32, y as i32],
+                    [vx as i32, vy as i32],
+                    p0 as i32,
+                    q as i32,
+                );
+                assert_eq!(i64::from(got), want, "κ {kappa} case {case}");
+            }
+        }
     }
 }
