@@ -68,6 +68,9 @@ impl<'h> RgbRows<'h> {
 }
 
 impl Sink for RgbRows<'_> {
+    // Bytes only: the engine skips the fields' conversions.
+    const FIELDS: bool = false;
+
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let n = pixels.len().min(COLS);
         let (row, pixels) = (&mut self.row[..n], &pixels[..n]);
