@@ -42,69 +42,66 @@ pub const FLAT_RANGE_Q32: u64 = 4;
 /// `byte = min(255, ⌊x · gain / 2^frac + ½⌋)` with `x = (m − offset) >> shift`
 /// in integer bits, so that `x · gain / 2^frac = (m − offset) · k`.
 ///
-/// Bound: at or above `limit = ⌈2^(frac+8) / gain⌉` the byte is 255; below
-/// it the product stays under `2^(frac+8) + gain ≤ 2⁶⁰ + 2⁶⁰`. A zero gain
-/// maps everything to 0.
+/// Bounds: `x < 2³²` (a larger `x` is a byte of 255 whatever the gain), and
+/// `gain < 2³²`, so the product is one 32×32→64 multiply on every target.
+/// A zero gain maps everything to 0 (its offset makes every `x` 0).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ByteScale {
     offset: u64,
     shift: u32,
-    gain: u64,
+    gain: u32,
     frac: u32,
-    limit: u64,
 }
 
 impl ByteScale {
-    fn new(offset: u64, shift: u32, gain: u64, frac: u32) -> Self {
-        match gain {
-            // Everything maps to 0: an offset no magnitude exceeds makes x = 0.
-            0 => Self {
-                offset: u64::MAX,
-                shift: 0,
-                gain: 0,
-                frac,
-                limit: u64::MAX,
-            },
-            g => Self {
-                offset,
-                shift,
-                gain,
-                frac,
-                limit: (1u64 << (frac + 8)).div_ceil(g),
-            },
+    fn new(offset: u64, shift: u32, gain: u32, frac: u32) -> Self {
+        // Everything maps to 0: an offset no magnitude exceeds makes x = 0.
+        let offset = if gain == 0 { u64::MAX } else { offset };
+        Self {
+            offset,
+            shift,
+            gain,
+            frac,
         }
     }
 
-    /// `Fixed(k)`: exact, `m` in Q32.32 times `k` in Q16.16 (`frac = 48`).
+    /// `Fixed(k)`: `m` cut to 2⁻¹⁶ px (`x = m >> 16 < 2³²`: magnitudes stay
+    /// below 2¹⁶ px) times `k` in Q16.16 (`frac = 32`), so the byte is
+    /// `min(255, ⌊m·k + ½⌋)` except within `k · 2⁻¹⁶` of a tie.
     pub fn fixed(k: U16F16) -> Self {
-        Self::new(0, 0, u64::from(k.to_bits()), 48)
+        Self::new(0, 16, k.to_bits(), 32)
     }
 
     /// Per-frame min–max from the frame's extremes (`min ≤ max`): the range
-    /// cut to 32 significant bits, `gain = round(255 · 2⁵² / range) ≥ 2²⁹`, so
-    /// the byte differs from the exact formula only within 2⁻²⁰ of a tie.
-    /// A range below 1e-9 px (SPEC §4: residue, not motion; 4 Q32.32 steps
-    /// or fewer) maps every magnitude to 0.
+    /// cut to 32 significant bits `r`, `gain = round(255 · 2^frac / r)` with
+    /// `frac = bitlen(r) + 23` (so `2³⁰ < gain < 2³²`): the byte differs from
+    /// the exact formula only within 2⁻²⁰ of a tie. A range below 1e-9 px
+    /// (SPEC §4: residue, not motion; 4 Q32.32 steps or fewer) maps every
+    /// magnitude to 0.
     pub fn min_max(min: U32F32, max: U32F32) -> Self {
         let (lo, hi) = (min.to_bits(), max.to_bits());
         let range = hi.saturating_sub(lo);
         let shift = (u64::BITS - range.leading_zeros()).saturating_sub(32);
-        let gain = match range >> shift {
-            _ if range <= FLAT_RANGE_Q32 => 0,
-            r => ((255u64 << 52) + r / 2) / r,
+        let r = range >> shift;
+        let frac = u64::BITS - r.leading_zeros() + 23;
+        let gain = match range {
+            0..=FLAT_RANGE_Q32 => 0,
+            // < 255 · 2^(b+23) / 2^(b−1) = 255 · 2²⁴ < 2³².
+            _ => (((255u64 << frac) + r / 2) / r) as u32,
         };
-        Self::new(lo, shift, gain, 52)
+        Self::new(lo, shift, gain, frac)
     }
 
     /// The byte of magnitude `m`.
     #[inline(always)]
     pub fn byte(&self, m: U32F32) -> u8 {
         let x = m.to_bits().saturating_sub(self.offset) >> self.shift;
-        if x >= self.limit {
+        let Ok(x) = u32::try_from(x) else {
             return 255;
-        }
-        ((((x * self.gain) >> (self.frac - 1)) + 1) >> 1).min(255) as u8
+        };
+        let product = u64::from(x) * u64::from(self.gain);
+        (((product >> (self.frac - 1)) + 1) >> 1).min(255) as u8
     }
 }
 
@@ -158,6 +155,7 @@ mod tests {
         (x * k + 0.5).floor().min(255.0) as u8
     }
 
+    /// Exact for magnitudes on the 2⁻¹⁶ px grid, within one elsewhere.
     #[test]
     fn fixed_gain_rounds_like_the_spec() {
         for k in [0.0, 0.5, 1.0, 8.0, 32.0, 1000.25, 65535.0] {
@@ -172,11 +170,18 @@ mod tests {
                 1 << 40,
                 0xFF_0000_0000,
                 1 << 47,
-                u64::MAX,
+                (1 << 48) - 1,
             ];
-            for bits in bits {
+            for bits in bits.into_iter().filter(|&b| b < 1 << 48) {
+                let grid = U32F32::from_bits(bits & !0xffff);
+                assert_eq!(
+                    scale.byte(grid),
+                    reference(grid.to_num(), k),
+                    "k={k} m={grid}"
+                );
                 let m = U32F32::from_bits(bits);
-                assert_eq!(scale.byte(m), reference(m.to_num(), k), "k={k} m={m}");
+                let want = reference(m.to_num(), k);
+                assert!(scale.byte(m).abs_diff(want) <= 1, "k={k} m={m}");
             }
         }
     }
