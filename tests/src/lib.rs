@@ -261,3 +261,36 @@ pub fn byte_diff(a: &[u8], b: &[u8]) -> ByteDiff {
         pixels: a.len(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn p999_is_exceeded_by_at_most_a_thousandth_of_pixels() {
+        // 2000 pixels: two errors may lie above p99.9, a third may not.
+        let zeros = vec![0.0; 2000];
+        let mut x = zeros.clone();
+        (x[5], x[9], x[700]) = (3.0, 2.0, 1.0);
+        let e = FieldError::measure(&x, &zeros, &zeros, &zeros);
+        assert_eq!((e.max_err, e.p999_err, e.pixels), (3.0, 1.0, 2000));
+        let z = &zeros[..1999];
+        let e = FieldError::measure(z, &x[..1999], z, z);
+        assert_eq!(e.p999_err, 2.0, "1999 pixels: one may lie above");
+    }
+
+    #[test]
+    fn byte_diff_counts_pixels_not_bytes() {
+        let a = [10, 20, 30, 10, 20, 30, 0, 0, 0];
+        let b = [11, 19, 30, 10, 20, 30, 0, 0, 3];
+        let d = byte_diff(&a, &b);
+        assert_eq!(
+            d,
+            ByteDiff {
+                max: 3,
+                differing_pixels: 2,
+                pixels: 3
+            }
+        );
+    }
+}

@@ -526,3 +526,38 @@ fn figures_hold_within_2x_and_no_further() {
         assert!(i.matches(&i.cell()), "{x}: {}", i.cell());
     }
 }
+
+#[test]
+fn a_pair_past_any_bound_is_a_failure() {
+    let at = |vc, vd_p999, vd_max, max, differing| PairResult {
+        family: Family::TinyMotions,
+        name: "synthetic".into(),
+        size: (10, 10),
+        set: 0,
+        max_vc: 1.0,
+        max_vd: 1.0,
+        vc,
+        vd_p999,
+        vd_max,
+        minmax: ByteDiff {
+            max,
+            differing_pixels: differing,
+            pixels: 100,
+        },
+        fixed: ByteDiff {
+            max: 0,
+            differing_pixels: 0,
+            pixels: 100,
+        },
+    };
+    assert!(at(1.0, 1.0, 1.0, 1, 1).failures().is_empty());
+    for broken in [
+        at(1.01, 0.0, 0.0, 0, 0),
+        at(0.0, 1.01, 0.0, 0, 0),
+        at(0.0, 0.0, 1.01, 0, 0),
+        at(0.0, 0.0, 0.0, 2, 1),
+        at(0.0, 0.0, 0.0, 1, 2),
+    ] {
+        assert_eq!(broken.failures().len(), 1);
+    }
+}
