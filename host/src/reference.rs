@@ -45,7 +45,7 @@ pub type FloatFlow = FlowPlanes;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FloatScaling {
     /// `x = m − min(m)`, `k = 255 / (max(m) − min(m))` per frame and
-    /// channel; all zero when the channel is constant.
+    /// channel; all zero when the range is below [`FLAT_RANGE`].
     PerFrameMinMax,
     /// `x = m` with constant gains.
     Fixed {
@@ -55,6 +55,11 @@ pub enum FloatScaling {
         k_c: f64,
     },
 }
+
+/// A per-frame min–max range below this many px is flat (SPEC §4): every
+/// byte 0. Such a range is float rounding residue, not motion: a global +1
+/// gives exact `v_c = 0`, which stages 1–4 in f64 leave as `|v_c|` ≈ 1e-15.
+pub const FLAT_RANGE: f64 = 1e-9;
 
 /// A float plane over the frame-coordinate rectangle
 /// `[x0, x0 + width) × [y0, y0 + height)`.
@@ -286,7 +291,7 @@ fn channel(m: &[f64], scaling: FloatScaling, fixed_k: f64) -> Vec<u8> {
         FloatScaling::PerFrameMinMax => {
             let min = m.iter().copied().fold(f64::INFINITY, f64::min);
             let max = m.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if max <= min {
+            if max - min < FLAT_RANGE {
                 return vec![0; m.len()];
             }
             let k = 255.0 / (max - min);
@@ -412,5 +417,27 @@ mod tests {
             channel(&[1.0, 3.0, 2.0], FloatScaling::PerFrameMinMax, 0.0),
             vec![0, 255, 128]
         );
+    }
+
+    #[test]
+    fn a_min_max_range_below_the_flat_limit_gives_zero_bytes() {
+        let minmax = |m: &[f64]| channel(m, FloatScaling::PerFrameMinMax, 0.0);
+        // Residue-sized ranges are flat, even when far from 0 ...
+        assert_eq!(minmax(&[0.0, 1.2e-15, 6e-16]), vec![0, 0, 0]);
+        assert_eq!(minmax(&[3.0, 3.0 + 0.9e-9]), vec![0, 0]);
+        // ... a range at the limit is stretched as usual.
+        assert_eq!(minmax(&[0.0, 1e-9, 0.41e-9]), vec![0, 255, 105]);
+        // A global +1 on texture: exact v_c is 0, f64 leaves residue; G is flat.
+        let f0 = gray(24, 16, |x, y| (40 + (x * 29 + y * 53) % 170) as u8);
+        let f1 = gray(24, 16, |x, y| f0.pixels[y * 24 + x] + 1);
+        let flow = compute(&f0, &f1, &FloatParams::default()).unwrap();
+        let (_, m_c) = flow.magnitudes();
+        let residue = m_c.iter().copied().fold(0.0, f64::max);
+        assert!(
+            residue > 0.0 && residue < FLAT_RANGE,
+            "|v_c| residue {residue:e}"
+        );
+        let rep = representation(&flow, &f0, FloatScaling::PerFrameMinMax);
+        assert!(rep.chunks(3).all(|p| p[1] == 0));
     }
 }

@@ -1,6 +1,8 @@
 //! Shared helpers of the integration tests: frame generators and whole-frame
 //! runs of the fixed core that collect every output pixel.
 
+pub mod corpus;
+
 use reynoldsflow_core::{Config, Engine, FlowPixel, FramePair, Plan, RowStream, Sink};
 
 /// Columns of the test engine: tiles up to 200 px wide.
@@ -198,50 +200,97 @@ pub struct FieldError {
     pub max_ref: f64,
     /// Largest per-pixel error (max over both components).
     pub max_err: f64,
+    /// The 99.9th percentile of the per-pixel error: at most 0.1 % of
+    /// pixels (⌊n/1000⌋ of n) have a larger one. So `p999_err ≤ t` exactly
+    /// when no more than 0.1 % of pixels are beyond `t`.
+    pub p999_err: f64,
     /// Root mean square of the per-pixel error.
     pub rms_err: f64,
-    /// Pixels whose error exceeds a given bound (set by `count_over`).
-    pub over: usize,
     pub pixels: usize,
 }
 
 impl FieldError {
-    /// Compare `(x, y)` against `(rx, ry)`, counting pixels over `bound(max_ref)`.
-    pub fn measure(
-        x: &[f64],
-        y: &[f64],
-        rx: &[f64],
-        ry: &[f64],
-        bound: impl Fn(f64) -> f64,
-    ) -> Self {
+    /// Compare `(x, y)` against `(rx, ry)`.
+    pub fn measure(x: &[f64], y: &[f64], rx: &[f64], ry: &[f64]) -> Self {
+        assert!(
+            x.len() == rx.len() && y.len() == ry.len() && x.len() == y.len(),
+            "fields of different sizes"
+        );
         let max_ref = rx
             .iter()
             .zip(ry)
             .map(|(a, b)| a.hypot(*b))
             .fold(0.0, f64::max);
-        let errs: Vec<f64> = (0..x.len())
+        let mut errs: Vec<f64> = (0..x.len())
             .map(|i| (x[i] - rx[i]).abs().max((y[i] - ry[i]).abs()))
             .collect();
-        let limit = bound(max_ref);
+        errs.sort_unstable_by(|a, b| b.total_cmp(a));
         Self {
             max_ref,
-            max_err: errs.iter().copied().fold(0.0, f64::max),
+            max_err: errs.first().copied().unwrap_or(0.0),
+            p999_err: errs.get(errs.len() / 1000).copied().unwrap_or(0.0),
             rms_err: (errs.iter().map(|e| e * e).sum::<f64>() / errs.len().max(1) as f64).sqrt(),
-            over: errs.iter().filter(|&&e| e > limit).count(),
             pixels: errs.len(),
         }
     }
 }
 
-/// Byte comparison of two representations: largest difference and how many
-/// bytes differ.
-pub fn byte_diff(a: &[u8], b: &[u8]) -> (u8, usize) {
+/// Comparison of two RGB8 representations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ByteDiff {
+    /// Largest difference of any byte.
+    pub max: u8,
+    /// Pixels with at least one differing byte.
+    pub differing_pixels: usize,
+    pub pixels: usize,
+}
+
+/// Byte comparison of two RGB8 representations: largest difference and how
+/// many pixels differ.
+pub fn byte_diff(a: &[u8], b: &[u8]) -> ByteDiff {
     assert_eq!(a.len(), b.len(), "representations of different sizes");
-    let max = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap_or(0);
-    (max, a.iter().zip(b).filter(|(x, y)| x != y).count())
+    assert_eq!(a.len() % 3, 0, "not RGB8");
+    let (a, b) = (a.chunks_exact(3), b.chunks_exact(3));
+    let pairs = || a.clone().zip(b.clone());
+    ByteDiff {
+        max: pairs()
+            .flat_map(|(p, q)| p.iter().zip(q).map(|(x, y)| x.abs_diff(*y)))
+            .max()
+            .unwrap_or(0),
+        differing_pixels: pairs().filter(|(p, q)| p != q).count(),
+        pixels: a.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn p999_is_exceeded_by_at_most_a_thousandth_of_pixels() {
+        // 2000 pixels: two errors may lie above p99.9, a third may not.
+        let zeros = vec![0.0; 2000];
+        let mut x = zeros.clone();
+        (x[5], x[9], x[700]) = (3.0, 2.0, 1.0);
+        let e = FieldError::measure(&x, &zeros, &zeros, &zeros);
+        assert_eq!((e.max_err, e.p999_err, e.pixels), (3.0, 1.0, 2000));
+        let z = &zeros[..1999];
+        let e = FieldError::measure(z, &x[..1999], z, z);
+        assert_eq!(e.p999_err, 2.0, "1999 pixels: one may lie above");
+    }
+
+    #[test]
+    fn byte_diff_counts_pixels_not_bytes() {
+        let a = [10, 20, 30, 10, 20, 30, 0, 0, 0];
+        let b = [11, 19, 30, 10, 20, 30, 0, 0, 3];
+        let d = byte_diff(&a, &b);
+        assert_eq!(
+            d,
+            ByteDiff {
+                max: 3,
+                differing_pixels: 2,
+                pixels: 3
+            }
+        );
+    }
 }
