@@ -349,6 +349,23 @@ fn a_caps_change_and_a_flush_reset_the_pair() {
     assert_eq!(after[0].pts, Some(pts(3)));
 }
 
+#[test]
+fn a_stop_resets_the_pair() {
+    let (w, h) = (64, 48);
+    let clip = frames(5, w, h);
+    let mut rig = harness(&[]);
+    rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+    let before = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[..2], 0);
+    let element = rig.element().unwrap();
+    element.set_state(gst::State::Null).unwrap();
+    rig.play();
+    rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+    let after = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[2..], 2);
+    assert_eq!((before.len(), after.len()), (1, 2));
+    let expected = cli_outputs(&clip[2..], (w, h), &[]);
+    assert!(after.iter().map(|o| &o.rgb).eq(expected.iter()));
+}
+
 /// The core's cue sink, run by the core's engine on its own.
 fn core_regions(
     prev: &[u8],
