@@ -27,6 +27,7 @@ pub mod gray;
 pub mod image_io;
 pub mod npy;
 pub mod outputs;
+pub mod pair_pool;
 pub mod pipeline;
 pub mod reference;
 pub mod sequence;

@@ -1,0 +1,301 @@
+//! One frame pair at a time over a pool of threads, for a consumer that
+//! gets frames one by one and wants each result at once (the GStreamer
+//! element): the frame is cut into tiles balanced over the threads and
+//! computed in one engine pass, so no latency is added. `run` instead
+//! spreads whole pairs over its workers ([`pipeline`](crate::pipeline));
+//! both keep every core busy, and every tiling gives the same bytes.
+
+use rayon::prelude::*;
+use reynoldsflow_core::{
+    Config, ExtremesSink, FlowPixel, Frame, FramePair, HALO, IntensityScale, Params, Plan, Scaling,
+    Sink, rgb,
+};
+
+use crate::cli::values::{EngineKind, ScaleArg};
+use crate::dispatch::{self, Isa, Pass};
+use crate::fixed_engine::{ENGINE_COLS, HostEngine, MAX_TILE_WIDTH};
+use crate::outputs::{OutputSpec, PairFields, Variant};
+use crate::pipeline::{self, Compute};
+use crate::{FlowPlanes, HostError};
+
+/// The fixed engine's parameters, checked once, and the threads that run it.
+pub struct PairPool {
+    params: Params,
+    scaling: Scaling,
+    threads: usize,
+    pool: rayon::ThreadPool,
+    /// The last pair's pixels, row-major (kept to reuse the allocation).
+    pixels: Vec<FlowPixel>,
+}
+
+/// The core's output of one pair: every pixel, and the byte scales.
+pub struct PairPixels<'a> {
+    width: usize,
+    height: usize,
+    pixels: &'a [FlowPixel],
+    extremes: ExtremesSink,
+    scaling: Scaling,
+    pool: &'a rayon::ThreadPool,
+}
+
+impl PairPool {
+    /// The fixed engine with `reynoldsflow run`'s parameters, checked as
+    /// `run` checks them (same messages), on `threads` threads (at least 1).
+    pub fn new(
+        scale: ScaleArg,
+        intensity_scale: IntensityScale,
+        lambda: f64,
+        threads: usize,
+    ) -> Result<Self, HostError> {
+        Compute::new(EngineKind::Fixed, scale, intensity_scale, lambda, None)?;
+        let threads = threads.max(1);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("reynoldsflow-{i}"))
+            .build()
+            .map_err(|e| HostError::invalid("threads", e.to_string()))?;
+        Ok(Self {
+            params: pipeline::core_params(intensity_scale, lambda)?,
+            scaling: pipeline::core_scaling(scale)?,
+            threads,
+            pool,
+            pixels: Vec::new(),
+        })
+    }
+
+    /// The core's parameters.
+    pub fn params(&self) -> Params {
+        self.params
+    }
+
+    /// Run the engine on `(prev, next)`: every tile once, spread over the
+    /// threads. Fails when the frames differ in size or the core refuses them.
+    pub fn compute(
+        &mut self,
+        prev: Frame<'_>,
+        next: Frame<'_>,
+    ) -> Result<PairPixels<'_>, HostError> {
+        let (width, height) = (prev.width(), prev.height());
+        if (next.width(), next.height()) != (width, height) {
+            return Err(HostError::SizeMismatch {
+                prev: (width, height),
+                next: (next.width(), next.height()),
+            });
+        }
+        let config = Config::new(width, height, self.params)?;
+        let (tile_width, tile_height) = balanced_tile(width, height, self.threads);
+        let plan = Plan::<ENGINE_COLS>::new(config, tile_width, tile_height)?;
+        let frames = FramePair::new(&config, prev, next)?;
+        self.pixels.clear();
+        self.pixels.resize(width * height, FlowPixel::default());
+
+        // Each tile owns its segments of the rows it covers.
+        let mut tiles: Vec<TileRows<'_>> = plan
+            .tiles()
+            .map(|tile| TileRows {
+                rows: Vec::with_capacity(tile.height),
+                origin: (tile.x, tile.y),
+                extremes: ExtremesSink::default(),
+            })
+            .collect();
+        for (y, row) in self.pixels.chunks_mut(width).enumerate() {
+            let first = (y / tile_height) * plan.tiles_across();
+            let segments = row.chunks_mut(tile_width);
+            for (tile, segment) in tiles[first..].iter_mut().zip(segments) {
+                tile.rows.push(segment);
+            }
+        }
+        let extremes = self.pool.install(|| {
+            tiles
+                .par_iter_mut()
+                .enumerate()
+                .map_init(
+                    || Box::new(HostEngine::new()),
+                    |engine, (index, tile)| {
+                        let pass = Pass::Tile(index);
+                        dispatch::run(Isa::Best, engine, &plan, &frames, pass, tile)
+                            .map(|()| tile.extremes)
+                    },
+                )
+                .try_reduce(ExtremesSink::default, |mut a, b| {
+                    a.merge(b);
+                    Ok(a)
+                })
+        })?;
+        Ok(PairPixels {
+            width,
+            height,
+            pixels: &self.pixels,
+            extremes,
+            scaling: self.scaling,
+            pool: &self.pool,
+        })
+    }
+}
+
+/// One tile's segments of the frame's rows (tile row `k` is `rows[k]`)
+/// and the extremes of its magnitudes.
+struct TileRows<'a> {
+    rows: Vec<&'a mut [FlowPixel]>,
+    /// Frame column and row of the tile's top-left pixel.
+    origin: (usize, usize),
+    extremes: ExtremesSink,
+}
+
+impl Sink for TileRows<'_> {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let (x0, y0) = self.origin;
+        let start = x.saturating_sub(x0);
+        if let Some(dst) = self
+            .rows
+            .get_mut(y.saturating_sub(y0))
+            .and_then(|row| row.get_mut(start..start + pixels.len()))
+        {
+            dst.copy_from_slice(pixels);
+        }
+        self.extremes.row(y, x, pixels);
+    }
+}
+
+/// Tile size for `threads`: the widest tiles the engine takes, or narrower
+/// ones, in as many rows of tiles as gives the shortest pass, counting each
+/// tile's halo (`HALO` px on every side) and `⌈tiles / threads⌉` rounds.
+fn balanced_tile(width: usize, height: usize, threads: usize) -> (usize, usize) {
+    let min_across = width.div_ceil(MAX_TILE_WIDTH);
+    let mut best = (usize::MAX, (width.min(MAX_TILE_WIDTH), height));
+    for across in min_across..=min_across + threads {
+        for down in 1..=(2 * threads).min(height) {
+            let (tw, th) = (width.div_ceil(across), height.div_ceil(down));
+            let tiles = width.div_ceil(tw) * height.div_ceil(th);
+            let cost = tiles.div_ceil(threads) * (tw + 2 * HALO) * (th + 2 * HALO);
+            if cost < best.0 {
+                best = (cost, (tw, th));
+            }
+        }
+    }
+    best.1
+}
+
+impl PairPixels<'_> {
+    /// Frame size.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// Every pixel, row-major.
+    pub fn pixels(&self) -> &[FlowPixel] {
+        self.pixels
+    }
+
+    /// The RGB8 image of `variant`, row-major: exactly what `reynoldsflow
+    /// run --variant` writes for this pair.
+    pub fn image(&self, variant: Variant) -> Vec<u8> {
+        let (scale_d, scale_c) = self
+            .scaling
+            .byte_scales(|| Ok::<_, std::convert::Infallible>(self.extremes))
+            .unwrap_or_else(|never| match never {});
+        let mut rep = vec![0u8; 3 * self.pixels.len()];
+        let width = self.width.max(1);
+        self.pool.install(|| {
+            rep.par_chunks_mut(3 * width)
+                .zip(self.pixels.par_chunks(width))
+                .for_each(|(out, row)| {
+                    for (dst, px) in out.chunks_exact_mut(3).zip(row) {
+                        dst.copy_from_slice(&rgb(px, &scale_d, &scale_c));
+                    }
+                });
+        });
+        // Only the colour wheel reads the fields.
+        let plane = |f: fn(&FlowPixel) -> f64| match variant {
+            Variant::Hsv => self.pixels.iter().map(f).collect(),
+            _ => Vec::new(),
+        };
+        let fields = PairFields {
+            planes: FlowPlanes {
+                width: self.width,
+                height: self.height,
+                vcx: plane(|p| p.v_c[0].to_num()),
+                vcy: plane(|p| p.v_c[1].to_num()),
+                vdx: plane(|p| p.v_d[0].to_num()),
+                vdy: plane(|p| p.v_d[1].to_num()),
+            },
+            rep,
+        };
+        OutputSpec {
+            variant,
+            ..OutputSpec::default()
+        }
+        .image(&fields)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Gray;
+    use crate::fixed_engine::compute_fixed;
+
+    fn frame(width: usize, height: usize, seed: usize) -> Vec<u8> {
+        (0..width * height)
+            .map(|i| ((i * 7 + seed).wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect()
+    }
+
+    #[test]
+    fn tiles_are_balanced_over_the_threads() {
+        // One thread: the engine's widest full-height strips.
+        assert_eq!(balanced_tile(640, 480, 1), (MAX_TILE_WIDTH, 480));
+        // 640 px is five such strips: two or four threads get an even count.
+        for threads in [2, 4] {
+            let (tw, th) = balanced_tile(640, 480, threads);
+            let tiles = 640usize.div_ceil(tw) * 480usize.div_ceil(th);
+            assert_eq!(tiles % threads, 0, "{threads} threads: {tw}x{th}");
+            assert!(tw <= MAX_TILE_WIDTH);
+        }
+    }
+
+    #[test]
+    fn every_thread_count_gives_the_serial_engines_bytes() {
+        let (w, h) = (300, 45);
+        let (a, b) = (frame(w, h, 0), frame(w, h, 1));
+        let scales = [
+            ScaleArg::MinMax,
+            ScaleArg::Fixed {
+                k_d: 8.0,
+                k_c: 32.0,
+            },
+        ];
+        for scale in scales {
+            let scaling = pipeline::core_scaling(scale).unwrap();
+            let (ga, gb) = (
+                Gray::new(w, h, a.clone()).unwrap(),
+                Gray::new(w, h, b.clone()).unwrap(),
+            );
+            let serial = compute_fixed(&ga, &gb, Params::DEFAULT, None, scaling).unwrap();
+            for threads in [1, 2, 3, 7] {
+                let mut pool =
+                    PairPool::new(scale, IntensityScale::PER_255, 1e-4, threads).unwrap();
+                let prev = Frame::packed(&a, w, h).unwrap();
+                let next = Frame::packed(&b, w, h).unwrap();
+                let out = pool.compute(prev, next).unwrap();
+                assert!(out.image(Variant::Dc) == serial.rep, "{threads} threads");
+                let m_d: Vec<f64> = out.pixels().iter().map(|p| p.m_d.to_num()).collect();
+                assert!(m_d == serial.m_d);
+            }
+        }
+    }
+
+    #[test]
+    fn frames_of_two_sizes_are_refused() {
+        let mut pool = PairPool::new(ScaleArg::MinMax, IntensityScale::PER_255, 1e-4, 2).unwrap();
+        let (a, b) = (frame(20, 10, 0), frame(20, 12, 1));
+        let err = pool
+            .compute(
+                Frame::packed(&a, 20, 10).unwrap(),
+                Frame::packed(&b, 20, 12).unwrap(),
+            )
+            .err()
+            .unwrap();
+        assert!(matches!(err, HostError::SizeMismatch { .. }));
+    }
+}
