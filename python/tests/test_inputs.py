@@ -107,7 +107,6 @@ def test_wrong_shapes_and_values_raise_value_error(tmp_path):
         ({"intensity_scale": 0.1234567891234}, "intensity_scale"),
         ({"intensity_scale": (1, 0)}, "intensity_scale"),
         ({"tile": (0, 4)}, "tile"),
-        ({"tile": (200, 4)}, "tile"),
         ({"engine": "float", "tile": (8, 8)}, "tile"),
         ({"variant": "rgb"}, "variant"),
         ({"hsv_max": -1.0}, "hsv_max"),
