@@ -299,3 +299,271 @@ fn dataset_usage_errors() {
     assert_eq!(res.status.code(), Some(2));
     assert!(stderr(&res).contains("DST"), "{}", stderr(&res));
 }
+
+/// The JSON-lines status records of a run's stdout.
+fn records(out: &std::process::Output) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+/// Twelve small Y4M clips and a frame folder.
+fn many_items(src: &Path) {
+    let f: Vec<_> = (0..4).map(|t| moving_frame(24, 16, t)).collect();
+    fs::create_dir_all(src.join("class/seq")).unwrap();
+    for i in 0..12 {
+        fs::write(src.join(format!("class/clip{i}.y4m")), y4m(&f, "mono")).unwrap();
+    }
+    for (i, g) in f.iter().enumerate() {
+        fs::write(src.join(format!("class/seq/f{i}.pgm")), pgm(g)).unwrap();
+    }
+}
+
+#[test]
+fn two_concurrent_shards_make_the_unsharded_run_between_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst, whole) = (
+        tmp.path().join("src"),
+        tmp.path().join("dst"),
+        tmp.path().join("whole"),
+    );
+    many_items(&src);
+    let all = run(&args!["dataset", src, whole, "--threads", "1"]);
+    ok(&all);
+    let statuses: Vec<_> = records(&all).iter().map(|r| r["status"].clone()).collect();
+    assert_eq!(statuses.len(), 13);
+    assert!(statuses.iter().all(|s| s == "done"), "{statuses:?}");
+
+    let shard = |i: u32| {
+        Command::new(BIN)
+            .args([
+                OsStr::new("dataset"),
+                src.as_os_str(),
+                dst.as_os_str(),
+                OsStr::new("--threads"),
+                OsStr::new("1"),
+                OsStr::new("--shard"),
+                OsStr::new(&format!("{i}/2")),
+            ])
+            .env_remove("SLURM_ARRAY_TASK_ID")
+            .env_remove("JOB_COMPLETION_INDEX")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (shard(0), shard(1));
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    ok(&a);
+    ok(&b);
+    let paths = |out| -> Vec<String> {
+        records(out)
+            .iter()
+            .map(|r| r["path"].as_str().unwrap().to_owned())
+            .collect()
+    };
+    let (pa, pb) = (paths(&a), paths(&b));
+    assert!(!pa.is_empty() && !pb.is_empty(), "{pa:?} {pb:?}");
+    assert!(
+        pa.iter().all(|p| !pb.contains(p)),
+        "disjoint: {pa:?} {pb:?}"
+    );
+    assert_eq!(pa.len() + pb.len(), 13);
+    assert!(
+        stderr(&a).contains("(shard 0/2 of 13 items)"),
+        "{}",
+        stderr(&a)
+    );
+    // The union, file for file and byte for byte (markers included).
+    assert_eq!(tree(&dst), tree(&whole));
+    for file in tree(&dst) {
+        assert_eq!(
+            fs::read(dst.join(&file)).unwrap(),
+            fs::read(whole.join(&file)).unwrap(),
+            "{file}"
+        );
+    }
+    // A rerun of either shard skips everything.
+    let again = run(&args!["dataset", src, dst, "--shard", "1/2"]);
+    ok(&again);
+    let again = records(&again);
+    assert_eq!(again.len(), pb.len());
+    for r in &again {
+        assert_eq!(r["status"], "skipped", "{r}");
+        assert_eq!(r["frames"], 4, "{r}");
+        assert_eq!(r["error"], serde_json::Value::Null);
+    }
+}
+
+#[test]
+fn a_killed_shard_rerun_leaves_no_partial_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst, whole) = (
+        tmp.path().join("src"),
+        tmp.path().join("dst"),
+        tmp.path().join("whole"),
+    );
+    many_items(&src);
+    ok(&run(&args!["dataset", src, whole, "--threads", "1"]));
+    // Crash mid-write after 4 results: one item done, one with a temp file.
+    let res = run_with(
+        &args!["dataset", src, dst, "--threads", "1", "--shard", "0/2"],
+        None,
+        &[("REYNOLDSFLOW_ABORT_AFTER", OsStr::new("4"))],
+    );
+    assert!(!res.status.success());
+    assert_eq!(temp_files(&dst).len(), 1, "{:?}", tree(&dst));
+    let status = tmp.path().join("status.jsonl");
+    for i in 0..2 {
+        ok(&run(&args![
+            "dataset",
+            src,
+            dst,
+            "--threads",
+            "1",
+            "--shard",
+            format!("{i}/2"),
+            "--status",
+            status
+        ]));
+    }
+    assert!(temp_files(&dst).is_empty(), "{:?}", tree(&dst));
+    assert_eq!(tree(&dst), tree(&whole));
+    for file in tree(&dst).iter().filter(|f| f.ends_with(".png")) {
+        assert_eq!(
+            fs::read(dst.join(file)).unwrap(),
+            fs::read(whole.join(file)).unwrap()
+        );
+    }
+    // Both shards appended to one status file: one whole record per item.
+    let text = fs::read_to_string(&status).unwrap();
+    let lines: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 13);
+    assert_eq!(lines.iter().filter(|r| r["status"] == "skipped").count(), 1);
+}
+
+#[test]
+fn the_shard_comes_from_slurm_or_kubernetes_variables() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = tmp.path().join("src");
+    many_items(&src);
+    let items = |out: &std::process::Output| -> Vec<String> {
+        let mut v: Vec<String> = records(out)
+            .iter()
+            .map(|r| r["path"].as_str().unwrap().to_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let by_flag = run(&args![
+        "dataset",
+        src,
+        tmp.path().join("a"),
+        "--shard",
+        "1/3"
+    ]);
+    let slurm = run_with(
+        &args!["dataset", src, tmp.path().join("b")],
+        None,
+        &[
+            ("SLURM_ARRAY_TASK_ID", OsStr::new("2")),
+            ("SLURM_ARRAY_TASK_MIN", OsStr::new("1")),
+            ("SLURM_ARRAY_TASK_COUNT", OsStr::new("3")),
+        ],
+    );
+    let k8s = run_with(
+        &args!["dataset", src, tmp.path().join("c"), "--shards", "3"],
+        None,
+        &[("JOB_COMPLETION_INDEX", OsStr::new("1"))],
+    );
+    assert!(
+        stderr(&slurm).contains("from Slurm array task 2"),
+        "{}",
+        stderr(&slurm)
+    );
+    assert!(stderr(&k8s).contains("Kubernetes completion index 1 of 3"));
+    assert!(!items(&by_flag).is_empty());
+    assert_eq!(items(&slurm), items(&by_flag));
+    assert_eq!(items(&k8s), items(&by_flag));
+    // The count is needed with a Kubernetes index; an index must be below it.
+    let res = run_with(
+        &args!["dataset", src, tmp.path().join("d")],
+        None,
+        &[("JOB_COMPLETION_INDEX", OsStr::new("1"))],
+    );
+    assert_eq!(res.status.code(), Some(1));
+    assert!(stderr(&res).contains("--shards N"), "{}", stderr(&res));
+    let res = run(&args![
+        "dataset",
+        src,
+        tmp.path().join("e"),
+        "--shard",
+        "3/3"
+    ]);
+    assert_eq!(res.status.code(), Some(2));
+    assert!(
+        stderr(&res).contains("not below the count"),
+        "{}",
+        stderr(&res)
+    );
+}
+
+#[test]
+fn files_from_takes_the_listed_items_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    many_items(&src);
+    let list = tmp.path().join("todo.txt");
+    fs::write(
+        &list,
+        format!(
+            "# two clips, the frames, a missing file\nclass/clip3.y4m\n\n{}\nclass/seq\nclass/gone.y4m\n",
+            src.join("class/clip7.y4m").display()
+        ),
+    )
+    .unwrap();
+    let res = run(&args!["dataset", src, dst, "--files-from", list]);
+    assert_eq!(res.status.code(), Some(1), "{}", stderr(&res));
+    let mut got: Vec<(String, String)> = records(&res)
+        .iter()
+        .map(|r| {
+            (
+                r["output"].as_str().unwrap().to_owned(),
+                r["status"].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect();
+    got.sort();
+    let out = |rel: &str| dst.join(rel).display().to_string();
+    assert_eq!(
+        got,
+        [
+            (out("class/clip3"), "done".to_owned()),
+            (out("class/clip7"), "done".to_owned()),
+            (out("class/gone"), "failed".to_owned()),
+            (out("class/seq"), "done".to_owned()),
+        ]
+    );
+    assert!(stderr(&res).contains("4 items: 3 done"), "{}", stderr(&res));
+    // Three outputs and a marker each.
+    assert_eq!(tree(&dst).len(), 3 * 4);
+    // A path outside SRC is refused before anything runs.
+    fs::write(&list, "../elsewhere.y4m\n").unwrap();
+    let res = run(&args![
+        "dataset",
+        src,
+        tmp.path().join("x"),
+        "--files-from",
+        list
+    ]);
+    assert_eq!(res.status.code(), Some(1));
+    assert!(
+        stderr(&res).contains("line 1: ../elsewhere.y4m"),
+        "{}",
+        stderr(&res)
+    );
+}

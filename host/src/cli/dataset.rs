@@ -18,6 +18,12 @@
 //! **Failures.** A file that cannot be read or decoded is reported and
 //! skipped; the other items go on. The summary lists each failure with its
 //! reason, and the exit status is 1 if any item failed (0 otherwise).
+//!
+//! **Clusters.** `--shard I/N` takes the items of shard `I` ([`shard`]),
+//! so `N` processes (a Slurm array, a Kubernetes Indexed Job) share one
+//! dataset and one destination; `--files-from` takes the items from a
+//! manifest; each item's [`Record`] goes to stdout or `--status FILE` as a
+//! JSON line.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -27,6 +33,8 @@ use std::time::Instant;
 
 use super::progress::Progress;
 use super::run::{EngineArgs, OutputArgs, count, install_interrupt_handler};
+use super::shard::{self, Shard};
+use super::status::{Record, Status, StatusLog};
 use crate::outputs::{DirWriter, OutputSpec};
 use crate::pipeline::{self, Compute, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
@@ -42,13 +50,20 @@ Examples:
       one representation per frame, 8 cores; rerun the same command to resume
   reynoldsflow dataset clips/ fields/ --no-rep --npy=v_R --flo
       fields only: fields/<clip>/v_R/<stem>.npy and .flo
+  reynoldsflow dataset videos/ reps/ --shard 3/8 --status reps/status.jsonl
+      the items of shard 3 of 8 (by a hash of each item's path); 8 such processes share one DST
+  reynoldsflow dataset videos/ reps/ --files-from todo.txt
+      only the videos and frame folders listed (one path relative to SRC per line)
 
 Videos (mp4, avi, mkv, mov, webm, y4m, ...) become DST/<path>/<video stem>/000000.png, ...;
 folders holding PNG/JPEG/PGM frames become DST/<path>/ with the frames' stems.
 Resume: an item is finished when DST/<item>/.reynoldsflow-done exists (written last, with
 the options); a rerun skips finished items made with the same options and redoes the rest.
 Files are written under hidden temp names and renamed, so none is ever partial.
-A bad file is reported and skipped; the exit status is 1 if any item failed.";
+A bad file is reported and skipped; the exit status is 1 if any item failed.
+One JSON line per item on stdout (or --status FILE): path, output, status, frames, outputs,
+seconds, error. In a Slurm job array (--array=0-7) the shard comes from SLURM_ARRAY_TASK_*;
+in a Kubernetes Indexed Job from JOB_COMPLETION_INDEX with --shards N.";
 
 /// The completion marker in each finished item's output folder.
 pub const MARKER: &str = ".reynoldsflow-done";
@@ -72,6 +87,23 @@ pub struct DatasetArgs {
     /// Redo items that are already finished.
     #[arg(long)]
     pub force: bool,
+    /// Take only the items of shard I of N (0 <= I < N), chosen by a hash
+    /// of each item's path relative to SRC [default: from a Slurm job
+    /// array's or a Kubernetes Indexed Job's variables, else all items].
+    #[arg(long, value_name = "I/N", value_parser = shard::parse_shard, conflicts_with = "shards", help_heading = "Clusters")]
+    pub shard: Option<Shard>,
+    /// The number of shards N, the index I coming from the scheduler
+    /// (JOB_COMPLETION_INDEX of a Kubernetes Indexed Job, or SLURM_ARRAY_TASK_ID).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..), help_heading = "Clusters")]
+    pub shards: Option<u64>,
+    /// Take the items from LIST (- for stdin): one video or frame folder
+    /// per line, relative to SRC; empty lines and lines starting with #
+    /// are ignored.
+    #[arg(long, value_name = "LIST", help_heading = "Clusters")]
+    pub files_from: Option<PathBuf>,
+    /// Append the JSON-lines status records to FILE instead of stdout.
+    #[arg(long, value_name = "FILE", help_heading = "Clusters")]
+    pub status: Option<PathBuf>,
     /// The computation.
     #[command(flatten)]
     pub engine: EngineArgs,
@@ -165,6 +197,83 @@ fn walk(
     Ok(())
 }
 
+/// The items listed in `list` (`-`: stdin), one path relative to `src` per
+/// line (or absolute, inside `src`), sorted by output path like
+/// [`discover`]'s. A folder is a frame folder, anything else a video; a
+/// path that does not exist becomes an item that fails when it is opened.
+pub fn manifest(src: &Path, list: &Path) -> Result<Vec<Item>, HostError> {
+    let text = if list.as_os_str() == "-" {
+        std::io::read_to_string(std::io::stdin()).map_err(|e| HostError::io("stdin", e))?
+    } else {
+        fs::read_to_string(list).map_err(|e| HostError::io(list, e))?
+    };
+    if !src.is_dir() {
+        return Err(input_error(
+            src,
+            "--files-from lists paths relative to SRC, so SRC must be a folder",
+        ));
+    }
+    let mut items = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim_end_matches('\r');
+        if line.trim().is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let at_line =
+            |problem: &str| input_error(list, format!("line {}: {line}: {problem}", n + 1));
+        let path = Path::new(line);
+        let rel = if path.is_absolute() {
+            path.strip_prefix(src)
+                .map_err(|_| at_line("not inside SRC"))?
+        } else {
+            path
+        };
+        let rel: PathBuf = rel
+            .components()
+            .filter(|c| !matches!(c, std::path::Component::CurDir))
+            .collect();
+        if rel.as_os_str().is_empty()
+            || rel
+                .components()
+                .any(|c| !matches!(c, std::path::Component::Normal(_)))
+        {
+            return Err(at_line("expected a path inside SRC (no '..')"));
+        }
+        let full = src.join(&rel);
+        let frames = full.is_dir();
+        let out = if frames {
+            rel.clone()
+        } else {
+            let stem = rel.file_stem().unwrap_or(rel.as_os_str());
+            rel.parent().unwrap_or(Path::new("")).join(stem)
+        };
+        items.push(Item {
+            src: full,
+            rel: out,
+            frames,
+        });
+    }
+    items.sort_by(|a, b| a.rel.cmp(&b.rel).then_with(|| a.src.cmp(&b.src)));
+    items.dedup();
+    Ok(items)
+}
+
+/// The key an item is sharded by: its source path relative to `src`, with
+/// `/` separators (the file name when SRC is the item itself).
+fn shard_key(src: &Path, item: &Item) -> String {
+    let rel = item
+        .src
+        .strip_prefix(src)
+        .ok()
+        .filter(|r| !r.as_os_str().is_empty())
+        .or_else(|| item.src.file_name().map(Path::new))
+        .unwrap_or(&item.src);
+    rel.components()
+        .map(|c| c.as_os_str().to_string_lossy())
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
 /// How an item ended.
 enum Outcome {
     Done(Summary),
@@ -185,64 +294,162 @@ fn marker_text(item: &Item, summary: &Summary, options: &str) -> String {
     )
 }
 
-/// The options line of a marker, when the item is finished.
-fn finished_with(out: &Path) -> Option<String> {
-    let text = fs::read_to_string(out.join(MARKER)).ok()?;
-    text.lines()
-        .find_map(|l| l.strip_prefix("options: "))
-        .map(str::to_owned)
+/// A finished item's marker: its options line, frames and outputs.
+struct Marker {
+    options: String,
+    frames: Option<usize>,
+    outputs: Option<usize>,
 }
 
-/// Settings shared by every item.
-struct Shared<'a> {
-    dst: &'a Path,
-    compute: &'a Compute,
-    spec: &'a OutputSpec,
+fn finished(out: &Path) -> Option<Marker> {
+    let text = fs::read_to_string(out.join(MARKER)).ok()?;
+    let field = |name: &str| text.lines().find_map(|l| l.strip_prefix(name));
+    Some(Marker {
+        options: field("options: ")?.to_owned(),
+        frames: field("frames: ").and_then(|v| v.parse().ok()),
+        outputs: field("outputs: ").and_then(|v| v.parse().ok()),
+    })
+}
+
+/// What every item is made with: checked once, shared by the workers.
+pub struct ItemRunner {
+    compute: Compute,
+    spec: OutputSpec,
     options: Options,
     fingerprint: String,
     force: bool,
 }
 
-fn process_item(item: &Item, shared: &Shared<'_>, on_output: &mut dyn FnMut()) -> Outcome {
-    let out = shared.dst.join(&item.rel);
-    if !shared.force && finished_with(&out).as_deref() == Some(shared.fingerprint.as_str()) {
-        return Outcome::Skipped;
-    }
-    let result = (|| -> Result<Summary, HostError> {
-        let marker = out.join(MARKER);
-        if marker.exists() {
-            fs::remove_file(&marker).map_err(|e| HostError::io(&marker, e))?;
+impl ItemRunner {
+    /// Check the options; each item runs on `threads` workers.
+    pub fn new(
+        engine: &EngineArgs,
+        output: &OutputArgs,
+        threads: usize,
+        force: bool,
+    ) -> Result<Self, HostError> {
+        let compute = engine.compute.compute()?;
+        let spec = output.spec();
+        if !spec.writes_anything() {
+            return Err(HostError::invalid(
+                "--no-rep",
+                "nothing left to write; add --viz, --npy or --flo",
+            ));
         }
-        let mut source: Box<dyn FrameSource> = if item.frames {
-            Box::new(FolderSource::dir(&item.src)?)
-        } else {
-            sequence::open(&InputSpec::Path {
-                path: item.src.clone(),
-                raw: None,
-            })?
-        };
-        let dir = DirWriter::prepare(&out, shared.spec)?;
-        let summary = pipeline::process(
-            &mut *source,
-            shared.compute,
-            Destination::Dir(&dir),
-            shared.options,
-            on_output,
-        )?;
-        if summary.frames == 0 {
-            return Err(input_error(&item.src, "no frames"));
-        }
-        atomic::write_file(
-            &marker,
-            marker_text(item, &summary, &shared.fingerprint).as_bytes(),
-        )?;
-        Ok(summary)
-    })();
-    match result {
-        Ok(summary) => Outcome::Done(summary),
-        Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
-        Err(e) => Outcome::Failed(e.to_string()),
+        let fingerprint = format!(
+            "{} {:?} scale={:?} s={}/{} lambda={} keep_count={} max_frames={:?}",
+            spec.describe(),
+            compute.engine(),
+            engine.compute.scale,
+            engine.compute.intensity_scale.num(),
+            engine.compute.intensity_scale.den(),
+            engine.compute.lambda,
+            output.keep_count,
+            output.max_frames
+        );
+        Ok(Self {
+            compute,
+            spec,
+            options: output.options(threads),
+            fingerprint,
+            force,
+        })
     }
+
+    /// One item into the folder `out`: skipped when finished with these
+    /// options, else computed, then marked finished.
+    fn process(&self, item: &Item, out: &Path, on_output: &mut dyn FnMut()) -> Outcome {
+        if !self.force && finished(out).is_some_and(|m| m.options == self.fingerprint) {
+            return Outcome::Skipped;
+        }
+        let result = (|| -> Result<Summary, HostError> {
+            let marker = out.join(MARKER);
+            if marker.exists() {
+                fs::remove_file(&marker).map_err(|e| HostError::io(&marker, e))?;
+            }
+            let mut source: Box<dyn FrameSource> = if item.frames {
+                Box::new(FolderSource::dir(&item.src)?)
+            } else {
+                sequence::open(&InputSpec::Path {
+                    path: item.src.clone(),
+                    raw: None,
+                })?
+            };
+            let dir = DirWriter::prepare(out, &self.spec)?;
+            let summary = pipeline::process(
+                &mut *source,
+                &self.compute,
+                Destination::Dir(&dir),
+                self.options,
+                on_output,
+            )?;
+            if summary.frames == 0 {
+                return Err(input_error(&item.src, "no frames"));
+            }
+            atomic::write_file(
+                &marker,
+                marker_text(item, &summary, &self.fingerprint).as_bytes(),
+            )?;
+            Ok(summary)
+        })();
+        match result {
+            Ok(summary) => Outcome::Done(summary),
+            Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
+            Err(e) => Outcome::Failed(e.to_string()),
+        }
+    }
+}
+
+/// The status record of `item`, written to `out`.
+fn record(item: &Item, out: &Path, outcome: &Outcome, seconds: f64) -> Record {
+    let mut r = Record {
+        path: item.src.display().to_string(),
+        output: out.display().to_string(),
+        status: Status::Done,
+        frames: None,
+        outputs: None,
+        seconds,
+        error: None,
+    };
+    match outcome {
+        Outcome::Done(s) => (r.frames, r.outputs) = (Some(s.frames), Some(s.outputs)),
+        Outcome::Skipped => {
+            r.status = Status::Skipped;
+            if let Some(m) = finished(out) {
+                (r.frames, r.outputs) = (m.frames, m.outputs);
+            }
+        }
+        Outcome::Failed(why) => (r.status, r.error) = (Status::Failed, Some(why.clone())),
+        Outcome::Interrupted => r.status = Status::Interrupted,
+    }
+    r
+}
+
+/// One video or frame folder `src` into the folder `out`, exactly as
+/// `dataset` makes each item (same files, same marker: resumable, and
+/// skipped when finished with the same options). Bad options are an
+/// error; a bad input is a record with status `failed`.
+pub fn convert(
+    src: &Path,
+    out: &Path,
+    engine: &EngineArgs,
+    output: &OutputArgs,
+    force: bool,
+) -> Result<Record, HostError> {
+    let runner = ItemRunner::new(engine, output, engine.threads(), force)?;
+    let item = Item {
+        src: src.to_owned(),
+        rel: PathBuf::new(),
+        frames: src.is_dir(),
+    };
+    let started = Instant::now();
+    let outcome = runner.process(&item, out, &mut || {});
+    Ok(record(
+        &item,
+        out,
+        &outcome,
+        started.elapsed().as_secs_f64(),
+    ))
 }
 
 /// `reynoldsflow: failed: <file>: <reason>`, naming the file once.
@@ -255,22 +462,36 @@ fn failure_line(item: &Item, why: &str) -> String {
     }
 }
 
+/// `--shard`, else the scheduler's, else every item.
+fn which_shard(args: &DatasetArgs) -> Result<Shard, HostError> {
+    if let Some(shard) = args.shard {
+        return Ok(shard);
+    }
+    match Shard::from_scheduler(|name| std::env::var(name).ok(), args.shards)? {
+        Some((shard, from)) => {
+            eprintln!(
+                "reynoldsflow: shard {}/{} from {from} (--shard 0/1 takes every item)",
+                shard.index, shard.count
+            );
+            Ok(shard)
+        }
+        None => Ok(Shard::ALL),
+    }
+}
+
 /// Run the subcommand.
 pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
-    let compute = args.engine.compute.compute()?;
-    let spec = args.output.spec();
-    if !spec.writes_anything() {
-        return Err(HostError::invalid(
-            "--no-rep",
-            "nothing left to write; add --viz, --npy or --flo",
-        ));
-    }
+    let shard = which_shard(args)?;
+    let threads = args.engine.threads();
+    // Checked before anything is created; the workers' share is set below.
+    ItemRunner::new(&args.engine, &args.output, threads, args.force)?;
     if args.dst.exists() && !args.dst.is_dir() {
         return Err(input_error(
             &args.dst,
             "destination exists and is not a folder",
         ));
     }
+    let log = StatusLog::open(args.status.as_deref())?;
     fs::create_dir_all(&args.dst).map_err(|e| {
         HostError::io(
             &args.dst,
@@ -278,40 +499,26 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
         )
     })?;
     let skip = fs::canonicalize(&args.dst).ok();
-    let items = discover(&args.src, skip.as_deref())?;
-    if items.is_empty() {
+    let all = match &args.files_from {
+        Some(list) => manifest(&args.src, list)?,
+        None => discover(&args.src, skip.as_deref())?,
+    };
+    if all.is_empty() {
         return Err(input_error(
-            &args.src,
+            args.files_from.as_deref().unwrap_or(&args.src),
             "no videos or frame folders found (videos by extension: mp4, avi, y4m, ...; frames: png, jpg, pgm, ...)",
         ));
     }
-    install_interrupt_handler();
-    let started = Instant::now();
-    let threads = args.engine.threads();
-    let workers = threads.min(items.len()).max(1);
-    let shared = Shared {
-        dst: &args.dst,
-        compute: &compute,
-        spec: &spec,
-        options: args.output.options(threads.div_ceil(workers)),
-        fingerprint: format!(
-            "{} {:?} scale={:?} s={}/{} lambda={} keep_count={} max_frames={:?}",
-            spec.describe(),
-            compute.engine(),
-            args.engine.compute.scale,
-            args.engine.compute.intensity_scale.num(),
-            args.engine.compute.intensity_scale.den(),
-            args.engine.compute.lambda,
-            args.output.keep_count,
-            args.output.max_frames
-        ),
-        force: args.force,
-    };
 
-    // Two items writing one folder would mix their outputs: refuse the later one.
+    // Two items writing one folder would mix their outputs: refuse the later
+    // one, judged on every item so that all shards agree.
+    let mut items = Vec::new();
     let mut outcomes: Vec<Option<Outcome>> = Vec::new();
-    for (i, item) in items.iter().enumerate() {
-        let clash = items[..i].iter().find(|o| o.rel == item.rel);
+    for (i, item) in all.iter().enumerate() {
+        if !shard.contains(&shard_key(&args.src, item)) {
+            continue;
+        }
+        let clash = all[..i].iter().find(|o| o.rel == item.rel);
         outcomes.push(clash.map(|o| {
             Outcome::Failed(format!(
                 "its output folder {} is also the output of {}; rename one",
@@ -319,15 +526,31 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
                 o.src.display()
             ))
         }));
+        items.push(item.clone());
+    }
+    for (item, outcome) in items.iter().zip(&outcomes) {
+        if let Some(outcome) = outcome {
+            log.write(&record(item, &args.dst.join(&item.rel), outcome, 0.0))?;
+        }
     }
     let todo: Vec<usize> = (0..items.len())
         .filter(|&i| outcomes[i].is_none())
         .collect();
 
+    install_interrupt_handler();
+    let started = Instant::now();
+    let workers = threads.min(todo.len()).max(1);
+    let runner = ItemRunner::new(
+        &args.engine,
+        &args.output,
+        threads.div_ceil(workers),
+        args.force,
+    )?;
     let progress = Progress::new(Some(items.len() as u64), "items");
     let frames_done = AtomicUsize::new(0);
     let next = AtomicUsize::new(0);
     let results = Mutex::new(Vec::new());
+    let log_error = Mutex::new(None);
     std::thread::scope(|scope| {
         for _ in 0..workers {
             scope.spawn(|| {
@@ -343,7 +566,16 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
                         let rate = n as f64 / started.elapsed().as_secs_f64().max(1e-9);
                         progress.message(format!("{n} results, {rate:.1}/s"));
                     };
-                    let outcome = process_item(&items[i], &shared, &mut tick);
+                    let item_started = Instant::now();
+                    let out = args.dst.join(&items[i].rel);
+                    let outcome = runner.process(&items[i], &out, &mut tick);
+                    let seconds = item_started.elapsed().as_secs_f64();
+                    if let Err(e) = log.write(&record(&items[i], &out, &outcome, seconds)) {
+                        log_error
+                            .lock()
+                            .expect("no panics holding it")
+                            .get_or_insert(e);
+                    }
                     if let Outcome::Failed(why) = &outcome
                         && Progress::enabled()
                     {
@@ -379,8 +611,18 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
             Some(Outcome::Interrupted) | None => not_started += 1,
         }
     }
+    let share = if shard == Shard::ALL {
+        String::new()
+    } else {
+        format!(
+            " (shard {}/{} of {})",
+            shard.index,
+            shard.count,
+            count(all.len(), "item")
+        )
+    };
     eprintln!(
-        "reynoldsflow: dataset {} -> {}: {}: {done} done, {skipped} already finished (skipped), {} failed{}; {} and {} in {seconds:.2} s ({:.1} frames/s)",
+        "reynoldsflow: dataset {} -> {}{share}: {}: {done} done, {skipped} already finished (skipped), {} failed{}; {} and {} in {seconds:.2} s ({:.1} frames/s)",
         args.src.display(),
         args.dst.display(),
         count(items.len(), "item"),
@@ -405,6 +647,9 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
                 "interrupted; rerun the same command to finish the unfinished items",
             ),
         ));
+    }
+    if let Some(e) = log_error.into_inner().expect("workers are done") {
+        return Err(e);
     }
     if !failures.is_empty() {
         return Err(HostError::invalid(

@@ -14,6 +14,8 @@ pub mod eval;
 pub mod pair;
 mod progress;
 pub mod run;
+pub mod shard;
+pub mod status;
 pub mod values;
 
 const EXAMPLES: &str = "\

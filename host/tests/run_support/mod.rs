@@ -26,6 +26,9 @@ pub fn run_with(args: &[OsString], stdin: Option<&[u8]>, env: &[(&str, &OsStr)])
     cmd.args(args)
         .env_remove("REYNOLDSFLOW_FFMPEG")
         .env_remove("REYNOLDSFLOW_ABORT_AFTER")
+        // Tests of `dataset` give a shard explicitly, never the CI runner's.
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX")
         .stdin(if stdin.is_some() {
             Stdio::piped()
         } else {

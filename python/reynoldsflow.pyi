@@ -1,0 +1,213 @@
+"""ReynoldsFlow: curl-free and divergence-free motion fields of frame pairs,
+and their RGB representation [|v_d|, |v_c|, frame n], computed by the same
+code as the ``reynoldsflow`` command line (the same bytes).
+
+Frames are 8-bit gray NumPy arrays of shape (H, W) or (H, W, 1), any
+strides. A wrong type, dtype or number of dimensions raises ``TypeError``;
+a wrong shape or parameter value ``ValueError``; a file that cannot be
+read ``OSError`` (``FileNotFoundError``, ...). The GIL is released while
+computing, so threads compute in parallel.
+
+Options shared by the computing functions (all keyword-only):
+
+- ``engine``: ``"fixed"`` (the fixed-point core, what embedded targets
+  compute; default) or ``"float"`` (the float64 reference).
+- ``scale``: ``"minmax"`` (per-frame min-max; default), ``"fixed:KD,KC"``
+  or ``(k_d, k_c)``: constant gains of |v_d| and |v_c| (the fixed engine
+  rounds them to 1/65536).
+- ``intensity_scale``: s in f = pixel * s, 6144/2**32 <= s <= 1; default
+  1/255. A float is taken as the exact ratio it rounds from (``1/255``);
+  also a ``fractions.Fraction``, a pair ``(num, den)`` or ``"1/255"``.
+- ``lam``: the Tikhonov term lambda of the 2x2 solve (default 1e-4).
+- ``tile``: ``(width, height)`` tiles for the fixed engine (width <= 128);
+  every tiling gives the same bytes.
+- ``variant``: the image: ``"dc"`` = [|v_d|, |v_c|, f] (default), ``"dc0"``
+  = [|v_d|, 0, f], ``"cd"`` = [|v_c|, |v_d|, f], ``"hsv"`` = colour wheel of
+  v_R; ``hsv_max``: its radius in pixels (default: each frame's longest
+  vector).
+"""
+
+from os import PathLike
+from fractions import Fraction
+from typing import Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+Engine = Literal["fixed", "float"]
+Scale = Union[str, Tuple[float, float]]
+IntensityScale = Union[float, Fraction, Tuple[int, int], str]
+Variant = Literal["dc", "dc0", "cd", "hsv"]
+Frame = npt.NDArray[np.uint8]
+Path = Union[str, PathLike[str]]
+
+def represent(
+    prev: Frame,
+    next: Frame,
+    *,
+    engine: Engine = "fixed",
+    scale: Scale = "minmax",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+    variant: Variant = "dc",
+    hsv_max: Optional[float] = None,
+) -> npt.NDArray[np.uint8]:
+    """The ReynoldsFlow representation of a frame pair: an (H, W, 3) uint8
+    image [|v_d|, |v_c|, prev] (variant "dc"), byte for byte what
+    ``reynoldsflow pair`` writes to rep.png."""
+
+class Fields(TypedDict):
+    v_c: npt.NDArray[np.float32]
+    v_d: npt.NDArray[np.float32]
+    v_R: npt.NDArray[np.float32]
+
+def fields(
+    prev: Frame,
+    next: Frame,
+    *,
+    engine: Engine = "fixed",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+) -> Fields:
+    """The curl-free field v_c, the divergence-free field v_d and their sum
+    v_R = v_c + v_d, each a float32 (H, W, 2) array, last axis (x, y) in
+    pixels (x right, y down), like OpenCV's flow: ``reynoldsflow pair``'s
+    .npy planes rounded to float32."""
+
+def motion_score(
+    prev: Frame,
+    next: Frame,
+    *,
+    engine: Engine = "fixed",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+) -> float:
+    """How much a pair moves: the mean over all pixels of |v_R| =
+    |v_c + v_d|, in pixels per frame (0.0 for identical frames). Rank or
+    threshold clips by it to drop static ones."""
+
+@overload
+def represent_clip(
+    frames: npt.NDArray[np.uint8],
+    *,
+    keep_count: bool = False,
+    threads: Optional[int] = None,
+    return_scores: Literal[False] = False,
+    engine: Engine = "fixed",
+    scale: Scale = "minmax",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+    variant: Variant = "dc",
+    hsv_max: Optional[float] = None,
+) -> npt.NDArray[np.uint8]: ...
+@overload
+def represent_clip(
+    frames: npt.NDArray[np.uint8],
+    *,
+    keep_count: bool = False,
+    threads: Optional[int] = None,
+    return_scores: Literal[True],
+    engine: Engine = "fixed",
+    scale: Scale = "minmax",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+    variant: Variant = "dc",
+    hsv_max: Optional[float] = None,
+) -> Tuple[npt.NDArray[np.uint8], npt.NDArray[np.float64]]:
+    """Every consecutive pair of a (T, H, W) or (T, H, W, 1) uint8 clip
+    (T >= 2): a (T - 1, H, W, 3) array whose image i is
+    represent(frames[i], frames[i + 1]); with keep_count=True, (T, H, W, 3),
+    the last image repeated so every frame has one. Pairs run on ``threads``
+    workers (default: every core); the bytes do not depend on it. With
+    return_scores=True, also the float64 (T - 1,) motion_score of each pair."""
+
+class Stream:
+    """Frames pushed one at a time (a camera, a decoder): push(frame)
+    returns None for the first frame, then the representation of (previous
+    frame, this frame), the same bytes as represent()."""
+
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        *,
+        engine: Engine = "fixed",
+        scale: Scale = "minmax",
+        intensity_scale: IntensityScale = ...,
+        lam: float = 1e-4,
+        tile: Optional[Tuple[int, int]] = None,
+        variant: Variant = "dc",
+        hsv_max: Optional[float] = None,
+    ) -> None: ...
+    def push(self, frame: Frame) -> Optional[npt.NDArray[np.uint8]]:
+        """The (height, width, 3) representation of (previous frame, frame),
+        or None for the first frame since the start or reset()."""
+    def reset(self) -> None:
+        """Forget the previous frame: the next push returns None."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+
+class Record(TypedDict):
+    path: str
+    output: str
+    status: Literal["done", "skipped", "failed", "interrupted"]
+    frames: Optional[int]
+    outputs: Optional[int]
+    seconds: float
+    error: Optional[str]
+
+def convert(
+    src: Path,
+    dst: Path,
+    *,
+    rep: bool = True,
+    viz: bool = False,
+    hsv_max: Optional[float] = None,
+    npy: Union[None, bool, str, Sequence[str]] = None,
+    flo: Union[None, bool, str, Sequence[str]] = None,
+    keep_count: bool = False,
+    max_frames: Optional[int] = None,
+    threads: Optional[int] = None,
+    force: bool = False,
+    engine: Engine = "fixed",
+    scale: Scale = "minmax",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+    variant: Variant = "dc",
+) -> Record:
+    """One video or frame folder ``src`` into the folder ``dst``, exactly as
+    ``reynoldsflow dataset`` makes each item (``reynoldsflow run``'s files
+    plus the marker .reynoldsflow-done, written last): a finished item is
+    skipped when run again with the same options; force=True redoes it.
+    npy=True writes v_c, v_d and v_R as .npy (or name them: "v_R" or
+    ["v_c", "v_R"]); flo=True writes v_R as .flo. Returns the status record;
+    an input that cannot be read gives status "failed" with the reason in
+    "error"; a bad option raises."""
+
+def dataset_items(
+    src: Path,
+    *,
+    files_from: Optional[Path] = None,
+    dst: Optional[Path] = None,
+) -> list[Tuple[str, str]]:
+    """The items ``reynoldsflow dataset SRC DST`` makes, in its order:
+    (video file or frame folder, its output folder relative to DST). With
+    files_from, those of that manifest (one path relative to src per line);
+    a dst inside src is not searched."""
+
+def read_flo(path: Path) -> npt.NDArray[np.float32]:
+    """A Middlebury .flo file as an (H, W, 2) float32 array, last axis (u, v)."""
+
+def write_flo(path: Path, flow: npt.NDArray[Union[np.float32, np.float64]]) -> None:
+    """Write an (H, W, 2) float array (last axis (x, y)) as a Middlebury
+    .flo file (float32), atomically."""

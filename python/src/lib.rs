@@ -1,0 +1,473 @@
+//! `import reynoldsflow`: the host crate's computation behind a NumPy API.
+//!
+//! Thin by design: every result comes from `reynoldsflow_host::pipeline::
+//! Compute::pair` (what `reynoldsflow pair`, `run` and `dataset` compute) or
+//! from `dataset::convert` (what `dataset` does per item), so the bytes are
+//! the command line's. This crate only turns arrays into frames and back,
+//! checks arguments (`TypeError` for a wrong type, dtype or number of
+//! dimensions, `ValueError` for a wrong shape or value), releases the GIL
+//! while computing, and turns any panic into a `RuntimeError`.
+
+use numpy::ndarray::Axis;
+use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rayon::prelude::*;
+
+use reynoldsflow_host::cli::dataset;
+use reynoldsflow_host::cli::status::Record;
+use reynoldsflow_host::outputs::{PairFields, flo};
+use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic};
+
+mod errors;
+mod frames;
+mod settings;
+
+use errors::{Failure, guarded, value_error};
+use frames::{Frames, gray};
+use settings::{Kwargs, Settings};
+
+/// The mean length of `v_R = v_c + v_d` over the frame, in pixels per
+/// frame: how much the pair moves (0 for identical frames).
+fn mean_speed(planes: &FlowPlanes) -> f64 {
+    let (x, y) = planes.v_r();
+    let sum: f64 = x.iter().zip(&y).map(|(x, y)| x.hypot(*y)).sum();
+    sum / x.len() as f64
+}
+
+/// An array of `shape` owning `data` (no copy).
+fn array<'py, T: Element>(
+    py: Python<'py>,
+    data: Vec<T>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<T>>> {
+    PyArray1::from_vec(py, data).reshape(shape)
+}
+
+/// Two frames checked as a pair: same size.
+fn pair_frames<'py>(
+    prev: &Bound<'py, PyAny>,
+    next: &Bound<'py, PyAny>,
+) -> PyResult<(Frames<'py>, Frames<'py>)> {
+    let (p, n) = (Frames::single(prev, "prev")?, Frames::single(next, "next")?);
+    if p.frame_shape() != n.frame_shape() {
+        return Err(value_error(format!(
+            "prev and next differ in shape: {:?} and {:?} (a pair is two frames of one size)",
+            p.frame_shape(),
+            n.frame_shape()
+        )));
+    }
+    Ok((p, n))
+}
+
+/// The fields and representation of `(prev, next)`, computed without the GIL.
+fn compute_pair(
+    py: Python<'_>,
+    settings: &Settings,
+    prev: &Frames<'_>,
+    next: &Frames<'_>,
+) -> PyResult<PairFields> {
+    let compute = settings.compute()?;
+    let (pv, nv) = (prev.view(), next.view());
+    py.detach(|| guarded(|| compute.pair(&gray(pv)?, &gray(nv)?)))
+        .map_err(Failure::into_pyerr)
+}
+
+/// represent(prev, next, *, engine="fixed", scale="minmax",
+/// intensity_scale=1/255, lam=1e-4, tile=None, variant="dc", hsv_max=None)
+///
+/// The ReynoldsFlow representation of a frame pair: an (H, W, 3) uint8
+/// image [|v_d|, |v_c|, prev] (variant "dc"), byte for byte what
+/// `reynoldsflow pair` writes to rep.png. Frames are (H, W) or (H, W, 1)
+/// uint8 arrays of any strides.
+#[pyfunction]
+#[pyo3(signature = (prev, next, **options))]
+fn represent<'py>(
+    py: Python<'py>,
+    prev: &Bound<'py, PyAny>,
+    next: &Bound<'py, PyAny>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
+    let settings = Settings::parse(Kwargs::new(py, "represent", options, settings::IMAGE_KEYS)?)?;
+    let (p, n) = pair_frames(prev, next)?;
+    let (h, w) = p.frame_shape();
+    let fields = compute_pair(py, &settings, &p, &n)?;
+    let spec = settings.output_spec();
+    array(py, py.detach(|| spec.image(&fields)), &[h, w, 3])
+}
+
+/// fields(prev, next, *, engine="fixed", intensity_scale=1/255, lam=1e-4,
+/// tile=None) -> {"v_c", "v_d", "v_R"}
+///
+/// The curl-free field v_c, the divergence-free field v_d and their sum
+/// v_R as float32 (H, W, 2) arrays, last axis (x, y) in pixels (x right,
+/// y down), like OpenCV's flow.
+#[pyfunction]
+#[pyo3(signature = (prev, next, **options))]
+fn fields<'py>(
+    py: Python<'py>,
+    prev: &Bound<'py, PyAny>,
+    next: &Bound<'py, PyAny>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let settings = Settings::parse(Kwargs::new(py, "fields", options, &[])?)?;
+    let (p, n) = pair_frames(prev, next)?;
+    let (h, w) = p.frame_shape();
+    let planes = compute_pair(py, &settings, &p, &n)?.planes;
+    let out = PyDict::new(py);
+    let (rx, ry) = planes.v_r();
+    for (name, x, y) in [
+        ("v_c", &planes.vcx, &planes.vcy),
+        ("v_d", &planes.vdx, &planes.vdy),
+        ("v_R", &rx, &ry),
+    ] {
+        let xy: Vec<f32> = x
+            .iter()
+            .zip(y)
+            .flat_map(|(x, y)| [*x as f32, *y as f32])
+            .collect();
+        out.set_item(name, array(py, xy, &[h, w, 2])?)?;
+    }
+    Ok(out)
+}
+
+/// motion_score(prev, next, *, engine="fixed", intensity_scale=1/255,
+/// lam=1e-4, tile=None) -> float
+///
+/// How much a pair moves: the mean over all pixels of |v_R| = |v_c + v_d|,
+/// in pixels per frame (0.0 for identical frames). Rank or threshold clips
+/// by it to drop static ones; represent_clip(..., return_scores=True) gives
+/// it for every pair of a clip.
+#[pyfunction]
+#[pyo3(signature = (prev, next, **options))]
+fn motion_score<'py>(
+    py: Python<'py>,
+    prev: &Bound<'py, PyAny>,
+    next: &Bound<'py, PyAny>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<f64> {
+    let settings = Settings::parse(Kwargs::new(py, "motion_score", options, &[])?)?;
+    let (p, n) = pair_frames(prev, next)?;
+    let fields = compute_pair(py, &settings, &p, &n)?;
+    Ok(py.detach(|| mean_speed(&fields.planes)))
+}
+
+/// represent_clip(frames, *, keep_count=False, threads=None,
+/// return_scores=False, engine="fixed", scale="minmax", ...)
+///
+/// Every consecutive pair of a (T, H, W) or (T, H, W, 1) uint8 clip: a
+/// (T - 1, H, W, 3) array whose image i is represent(frames[i],
+/// frames[i + 1]); with keep_count=True, (T, H, W, 3), the last image
+/// repeated so every frame has one. Pairs are computed on `threads` workers
+/// (default: every core); the bytes do not depend on it. With
+/// return_scores=True, returns (images, scores): scores[i] is
+/// motion_score(frames[i], frames[i + 1]), float64 of shape (T - 1,).
+#[pyfunction]
+#[pyo3(signature = (frames, **options))]
+fn represent_clip<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    let mut kw = Kwargs::new(
+        py,
+        "represent_clip",
+        options,
+        &[
+            settings::IMAGE_KEYS,
+            &["keep_count", "threads", "return_scores"],
+        ]
+        .concat(),
+    )?;
+    let keep_count = kw.flag("keep_count")?;
+    let return_scores = kw.flag("return_scores")?;
+    let threads = kw.threads()?;
+    let settings = Settings::parse(kw)?;
+    let compute = settings.compute()?;
+    let spec = settings.output_spec();
+    let clip = Frames::clip(frames, "frames")?;
+    let (t, (h, w)) = (clip.count(), clip.frame_shape());
+    if t < 2 {
+        return Err(value_error(format!(
+            "frames holds {t} frame(s); a result needs a pair, so at least 2 (shape (T, H, W), T >= 2)"
+        )));
+    }
+    let view = clip.view();
+    let frame_bytes = 3 * h * w;
+    let results = t - 1;
+    let (rgb, scores) = py
+        .detach(|| {
+            guarded(|| {
+                let grays = (0..t)
+                    .map(|i| gray(view.index_axis(Axis(0), i)))
+                    .collect::<Result<Vec<Gray>, HostError>>()?;
+                let mut rgb = vec![0u8; (results + usize::from(keep_count)) * frame_bytes];
+                let mut scores = vec![0.0f64; results];
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| HostError::invalid("threads", e.to_string()))?;
+                pool.install(|| {
+                    rgb[..results * frame_bytes]
+                        .par_chunks_mut(frame_bytes)
+                        .zip(scores.par_iter_mut())
+                        .enumerate()
+                        .try_for_each(|(i, (image, score))| {
+                            let fields = compute.pair(&grays[i], &grays[i + 1])?;
+                            image.copy_from_slice(&spec.image(&fields));
+                            *score = mean_speed(&fields.planes);
+                            Ok::<_, HostError>(())
+                        })
+                })?;
+                if keep_count {
+                    rgb.copy_within(
+                        (results - 1) * frame_bytes..results * frame_bytes,
+                        results * frame_bytes,
+                    );
+                }
+                Ok((rgb, scores))
+            })
+        })
+        .map_err(Failure::into_pyerr)?;
+    let images = array(py, rgb, &[results + usize::from(keep_count), h, w, 3])?;
+    if return_scores {
+        let scores = PyArray1::from_vec(py, scores);
+        Ok((images, scores).into_pyobject(py)?.into_any().unbind())
+    } else {
+        Ok(images.into_any().unbind())
+    }
+}
+
+/// Stream(width, height, *, engine="fixed", scale="minmax", ...)
+///
+/// Frames pushed one at a time (a camera, a decoder): push(frame) returns
+/// None for the first frame, then the representation of (previous frame,
+/// this frame), the same bytes as represent. Frames are (height, width) or
+/// (height, width, 1) uint8 arrays.
+#[pyclass(module = "reynoldsflow")]
+struct Stream {
+    width: usize,
+    height: usize,
+    settings: Settings,
+    prev: Option<Gray>,
+}
+
+#[pymethods]
+impl Stream {
+    #[new]
+    #[pyo3(signature = (width, height, **options))]
+    fn new(
+        py: Python<'_>,
+        width: usize,
+        height: usize,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let settings = Settings::parse(Kwargs::new(py, "Stream", options, settings::IMAGE_KEYS)?)?;
+        settings.compute()?;
+        if width == 0 || height == 0 {
+            return Err(value_error(format!(
+                "Stream: {width}x{height}: width and height must be at least 1"
+            )));
+        }
+        Ok(Self {
+            width,
+            height,
+            settings,
+            prev: None,
+        })
+    }
+
+    /// push(frame) -> None | (height, width, 3) uint8
+    ///
+    /// The representation of (previous frame, frame), or None for the
+    /// first frame since the start or reset().
+    fn push<'py>(
+        &mut self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Option<Bound<'py, PyArrayDyn<u8>>>> {
+        let f = Frames::single(frame, "frame")?;
+        if f.frame_shape() != (self.height, self.width) {
+            return Err(value_error(format!(
+                "frame has shape {:?}; this Stream takes (height, width) = ({}, {})",
+                f.frame_shape(),
+                self.height,
+                self.width
+            )));
+        }
+        let compute = self.settings.compute()?;
+        let spec = self.settings.output_spec();
+        let view = f.view();
+        let prev = self.prev.take();
+        let (next, image) = py
+            .detach(|| {
+                guarded(|| {
+                    let next = gray(view)?;
+                    let image = match &prev {
+                        None => None,
+                        Some(p) => Some(spec.image(&compute.pair(p, &next)?)),
+                    };
+                    Ok((next, image))
+                })
+            })
+            .map_err(|e| {
+                self.prev = prev.clone();
+                e.into_pyerr()
+            })?;
+        self.prev = Some(next);
+        image
+            .map(|rgb| array(py, rgb, &[self.height, self.width, 3]))
+            .transpose()
+    }
+
+    /// Forget the previous frame: the next push returns None.
+    fn reset(&mut self) {
+        self.prev = None;
+    }
+
+    /// Frame width in pixels.
+    #[getter]
+    fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Frame height in pixels.
+    #[getter]
+    fn height(&self) -> usize {
+        self.height
+    }
+}
+
+/// The status record as a dict.
+fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("path", &r.path)?;
+    d.set_item("output", &r.output)?;
+    d.set_item("status", r.status.name())?;
+    d.set_item("frames", r.frames)?;
+    d.set_item("outputs", r.outputs)?;
+    d.set_item("seconds", r.seconds)?;
+    d.set_item("error", &r.error)?;
+    Ok(d)
+}
+
+/// convert(src, dst, *, rep=True, viz=False, hsv_max=None, npy=None,
+/// flo=None, keep_count=False, max_frames=None, threads=None, force=False,
+/// engine="fixed", scale="minmax", intensity_scale=1/255, lam=1e-4,
+/// tile=None, variant="dc") -> dict
+///
+/// One video or frame folder `src` into the folder `dst`, exactly as
+/// `reynoldsflow dataset` makes each item: the same files, and the marker
+/// .reynoldsflow-done written last, so a finished item is skipped when run
+/// again with the same options (force=True redoes it). Returns the status
+/// record {"path", "output", "status", "frames", "outputs", "seconds",
+/// "error"}, status one of "done", "skipped", "failed"; an input that
+/// cannot be read is a "failed" record (with the reason in "error"), a bad
+/// option raises.
+#[pyfunction]
+#[pyo3(signature = (src, dst, **options))]
+fn convert<'py>(
+    py: Python<'py>,
+    src: std::path::PathBuf,
+    dst: std::path::PathBuf,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kw = Kwargs::new(py, "convert", options, settings::CONVERT_KEYS)?;
+    let (engine, output, force) = settings::convert_args(kw)?;
+    let record = py
+        .detach(|| guarded(|| dataset::convert(&src, &dst, &engine, &output, force)))
+        .map_err(Failure::into_pyerr)?;
+    record_dict(py, &record)
+}
+
+/// dataset_items(src, *, files_from=None, dst=None) -> list[tuple[str, str]]
+///
+/// The items `reynoldsflow dataset SRC DST` would make, in its order: (the
+/// video or frame folder, its output folder relative to DST). With
+/// files_from, those of that manifest (one path relative to src per line);
+/// with dst inside src, dst is not searched.
+#[pyfunction]
+#[pyo3(signature = (src, *, files_from=None, dst=None))]
+fn dataset_items(
+    py: Python<'_>,
+    src: std::path::PathBuf,
+    files_from: Option<std::path::PathBuf>,
+    dst: Option<std::path::PathBuf>,
+) -> PyResult<Vec<(String, String)>> {
+    let items = py
+        .detach(|| {
+            guarded(|| match &files_from {
+                Some(list) => dataset::manifest(&src, list),
+                None => {
+                    let skip = dst.and_then(|d| std::fs::canonicalize(d).ok());
+                    dataset::discover(&src, skip.as_deref())
+                }
+            })
+        })
+        .map_err(Failure::into_pyerr)?;
+    Ok(items
+        .into_iter()
+        .map(|i| (i.src.display().to_string(), i.rel.display().to_string()))
+        .collect())
+}
+
+/// read_flo(path) -> (H, W, 2) float32
+///
+/// A Middlebury .flo file as an array, last axis (u, v) = (x, y).
+#[pyfunction]
+fn read_flo<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
+    let flo = py
+        .detach(|| {
+            guarded(|| {
+                let bytes = std::fs::read(&path).map_err(|e| HostError::io(&path, e))?;
+                flo::decode(&bytes)
+                    .map_err(|why| HostError::invalid(path.display().to_string(), why))
+            })
+        })
+        .map_err(Failure::into_pyerr)?;
+    let uv: Vec<f32> = flo
+        .u
+        .iter()
+        .zip(&flo.v)
+        .flat_map(|(u, v)| [*u, *v])
+        .collect();
+    array(py, uv, &[flo.height, flo.width, 2])
+}
+
+/// write_flo(path, flow)
+///
+/// Write an (H, W, 2) float32 or float64 array (last axis (x, y)) as a
+/// Middlebury .flo file (float32), atomically: the file appears complete or
+/// not at all.
+#[pyfunction]
+fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) -> PyResult<()> {
+    let (h, w, u, v) = frames::flow_planes(flow)?;
+    py.detach(|| {
+        guarded(|| {
+            let bytes = flo::encode(w, h, &u, &v)?;
+            atomic::write_file(&path, &bytes)
+        })
+    })
+    .map_err(Failure::into_pyerr)
+}
+
+/// ReynoldsFlow: curl-free and divergence-free motion fields of frame
+/// pairs, and their RGB representation [|v_d|, |v_c|, frame n], computed by
+/// the same code as the `reynoldsflow` command line (same bytes).
+#[pymodule]
+fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(represent, m)?)?;
+    m.add_function(wrap_pyfunction!(fields, m)?)?;
+    m.add_function(wrap_pyfunction!(motion_score, m)?)?;
+    m.add_function(wrap_pyfunction!(represent_clip, m)?)?;
+    m.add_function(wrap_pyfunction!(convert, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset_items, m)?)?;
+    m.add_function(wrap_pyfunction!(read_flo, m)?)?;
+    m.add_function(wrap_pyfunction!(write_flo, m)?)?;
+    m.add_class::<Stream>()?;
+    Ok(())
+}

@@ -1,0 +1,107 @@
+"""convert and dataset_items: what `reynoldsflow dataset` does, item by item,
+byte for byte (markers included); the Ray recipe likewise, on a local Ray."""
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+import reynoldsflow as rf
+from conftest import clip, run_cli, tree, write_pgm, write_y4m
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def source_tree(root: Path) -> None:
+    """Two Y4M videos (one nested), a frame folder, a broken video, a text file."""
+    (root / "a" / "b").mkdir(parents=True)
+    write_y4m(root / "a" / "b" / "clip.y4m", clip(5))
+    write_y4m(root / "a" / "short.y4m", clip(3, 40, 24))
+    seq = root / "seq1"
+    seq.mkdir()
+    for i, name in enumerate(["img2.pgm", "img10.pgm", "img1.pgm"]):
+        write_pgm(seq / name, clip(3)[i])
+    (root / "a" / "cut.y4m").write_bytes(b"YUV4MPEG2 W4 H4 C444p12\n")
+    (root / "README").write_text("not a video")
+
+
+def records(stdout: str) -> list:
+    return [json.loads(line) for line in stdout.splitlines() if line.strip()]
+
+
+def test_convert_makes_what_dataset_makes(cli, tmp_path):
+    src, by_cli, by_py = tmp_path / "src", tmp_path / "cli", tmp_path / "py"
+    source_tree(src)
+    res = subprocess.run([str(cli), "dataset", str(src), str(by_cli), "--keep-count", "--npy=v_R", "--flo"],
+                         capture_output=True, text=True)
+    assert res.returncode == 1, res.stderr  # the broken video
+    cli_records = {r["path"]: r for r in records(res.stdout)}
+    items = rf.dataset_items(src)
+    assert {s for s, _ in items} == set(cli_records)
+    for s, rel in items:
+        r = rf.convert(s, by_py / rel, keep_count=True, npy="v_R", flo=True)
+        c = cli_records[s]
+        assert (r["status"], r["frames"], r["outputs"]) == (c["status"], c["frames"], c["outputs"]), (r, c)
+        assert r["output"] == str(by_py / rel)
+        assert set(r) == {"path", "output", "status", "frames", "outputs", "seconds", "error"}
+        if r["status"] == "failed":
+            assert "12-bit" in r["error"] and "12-bit" in c["error"]
+    assert tree(by_py) == tree(by_cli)
+    assert len([p for p in tree(by_py) if p.endswith(".npy")]) == 5 + 3 + 3
+    # Finished items are skipped on a rerun, by either.
+    for s, rel in items:
+        r = rf.convert(s, by_py / rel, keep_count=True, npy="v_R", flo=True)
+        assert r["status"] in ("skipped", "failed")
+        if r["status"] == "skipped":
+            assert r["frames"] == cli_records[s]["frames"]
+    res = subprocess.run([str(cli), "dataset", str(src), str(by_py), "--keep-count", "--npy=v_R", "--flo"],
+                         capture_output=True, text=True)
+    assert sorted(r["status"] for r in records(res.stdout)) == ["failed", "skipped", "skipped", "skipped"]
+    # Other options redo the item.
+    s, rel = items[0]
+    assert rf.convert(s, by_py / rel)["status"] == "done"
+    assert rf.convert(s, by_py / rel, force=True)["status"] == "done"
+
+
+def test_dataset_items_follow_a_manifest(tmp_path):
+    src = tmp_path / "src"
+    source_tree(src)
+    manifest = tmp_path / "todo.txt"
+    manifest.write_text("# a comment\nseq1\n\na/short.y4m\nmissing.y4m\n")
+    items = rf.dataset_items(src, files_from=manifest)
+    assert [rel for _, rel in items] == ["a/short", "missing", "seq1"]
+    r = rf.convert(items[1][0], tmp_path / "out" / "missing")
+    assert r["status"] == "failed" and "missing.y4m" in r["error"]
+
+
+def test_ray_recipe_outputs_equal_the_cli_dataset(cli, tmp_path):
+    import ray  # installed by scripts/test-python: its absence is a failure
+
+    src = tmp_path / "src"
+    source_tree(src)
+    (src / "a" / "cut.y4m").unlink()
+    write_y4m(src / "more.y4m", clip(7, 64, 40))
+    by_cli, by_ray = tmp_path / "cli", tmp_path / "ray"
+    run_cli(cli, "dataset", src, by_cli, "--keep-count")
+    # Ray keeps its sockets and logs in a short temp dir, and its state out of $HOME.
+    ray_tmp = tempfile.mkdtemp(prefix="rfray", dir="/tmp")
+    env = dict(os.environ, RAY_TMPDIR=ray_tmp, HOME=str(tmp_path), RAY_USAGE_STATS_ENABLED="0")
+    try:
+        res = subprocess.run(
+            [sys.executable, str(EXAMPLES / "ray_dataset.py"), str(src), str(by_ray), "--num-cpus", "2",
+             "--keep-count", "--status", str(tmp_path / "status.jsonl")],
+            capture_output=True, text=True, env=env, timeout=600,
+        )
+    finally:
+        subprocess.run(["rm", "-rf", ray_tmp])
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert "4 items: 4 done, 0 skipped, 0 failed" in res.stderr, res.stderr[-3000:]
+    assert tree(by_ray) == tree(by_cli)
+    assert len(tree(by_cli)) == 4 + 5 + 3 + 3 + 7
+    lines = records((tmp_path / "status.jsonl").read_text())
+    assert sorted(r["status"] for r in lines) == ["done"] * 4
+    assert ray.__version__
