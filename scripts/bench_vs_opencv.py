@@ -20,6 +20,16 @@ Configurations:
   dispatch   ours compiled for the baseline (SSE2) vs ours as dispatched at
              run time (AVX2 where the CPU has it), one thread, one pass
   scaling    ours parallel 1 thread vs 2 threads at 1280x720
+
+With --cli (the `reynoldsflow` binary), also what a user runs, on a Y4M
+sequence of SEQ_FRAMES textured moving frames (target/bench-frames/), in
+--run-rounds interleaved rounds; per round one `reynoldsflow run SEQ.y4m
+--out - --format rgb24 --threads N` process (wall time from start to exit:
+start-up, reading, computing and writing all included) divided by its pairs:
+  run 1t       DIS ultrafast 1 thread on the same consecutive pairs (frames
+               in memory, only `calc` timed)  vs  `run --threads 1`, default
+               scaling (per-frame min-max), 640x480
+  run scaling  `run --threads 1` vs `run --threads 2` at 1280x720
 """
 
 import argparse
@@ -102,6 +112,61 @@ def time_dis(prev, nxt, threads, seconds, min_iters, warmup=3):
     return times, flow
 
 
+SEQ_FRAMES = 31
+
+
+def textured_sequence(w, h, frames, seed=11):
+    """`frames` frames of a textured scene panning by (1.6, 0.8) px and
+    turning by 0.1 degree per frame, each with its own sensor noise."""
+    rng = np.random.default_rng(seed)
+    base = textured_pair(w + 128, h + 128, seed)[0].astype(np.float64)
+    center = ((w + 128) / 2, (h + 128) / 2)
+    out = []
+    for t in range(frames):
+        m = cv2.getRotationMatrix2D(center, 0.1 * t, 1.0)
+        m[:, 2] += (1.6 * t - 64, 0.8 * t - 64)
+        f = cv2.warpAffine(base, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        out.append(np.clip(f + rng.normal(0, 1.0, f.shape), 0, 255).round().astype(np.uint8))
+    return out
+
+
+def write_y4m(path, frames):
+    h, w = frames[0].shape
+    with open(path, "wb") as f:
+        f.write(b"YUV4MPEG2 W%d H%d F25:1 Ip A1:1 Cmono\n" % (w, h))
+        for frame in frames:
+            f.write(b"FRAME\n")
+            f.write(np.ascontiguousarray(frame).tobytes())
+
+
+def time_dis_sequence(frames, threads, seconds, min_iters):
+    """ms per pair of DIS over the sequence's consecutive pairs."""
+    cv2.setNumThreads(threads)
+    dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST)
+    dis.calc(frames[0], frames[1], None)
+    times = []
+    start = time.perf_counter()
+    while len(times) < min_iters or time.perf_counter() - start < seconds:
+        for prev, nxt in zip(frames, frames[1:]):
+            t = time.perf_counter()
+            dis.calc(prev, nxt, None)
+            times.append((time.perf_counter() - t) * 1e3)
+    return times
+
+
+def time_run(cli, y4m, pairs, threads, seconds, min_runs=2):
+    """ms per pair of whole `reynoldsflow run` processes streaming RGB24 to
+    /dev/null, one figure per process."""
+    cmd = [cli, "run", y4m, "--out", "-", "--format", "rgb24", "--threads", str(threads)]
+    times = []
+    start = time.perf_counter()
+    while len(times) < min_runs or time.perf_counter() - start < seconds:
+        t = time.perf_counter()
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        times.append((time.perf_counter() - t) * 1e3 / pairs)
+    return times
+
+
 def time_ours(binary, paths, mode, threads, seconds, min_iters):
     out = subprocess.run(
         [binary, "--prev", paths[0], "--next", paths[1], "--mode", mode,
@@ -118,6 +183,9 @@ def main():
     ap.add_argument("--rounds", type=int, default=4, help="A/B rounds per configuration")
     ap.add_argument("--seconds", type=float, default=0.6, help="minimum time of one block")
     ap.add_argument("--sizes", default="640x480,1280x720")
+    ap.add_argument("--cli", help="path of the reynoldsflow binary: also time `reynoldsflow run`")
+    ap.add_argument("--run-rounds", type=int, default=3, help="A/B rounds of the `run` rows")
+    ap.add_argument("--only-run", action="store_true", help="time the `run` rows only")
     args = ap.parse_args()
     os.makedirs(args.frames, exist_ok=True)
     cores = os.cpu_count()
@@ -128,10 +196,10 @@ def main():
 
     results = []  # (label, size, a_name, a_times, b_name, b_times, round_ratios)
 
-    def ab(label, size, a, b):
+    def ab(label, size, a, b, rounds=None):
         """Rounds of A then B; a, b = (name, fn returning a list of ms)."""
         a_all, b_all, ratios = [], [], []
-        for _ in range(args.rounds):
+        for _ in range(rounds or args.rounds):
             ta = a[1]()
             tb = b[1]()
             a_all += ta
@@ -159,6 +227,24 @@ def main():
 
         def ours(mode, threads):
             return lambda: time_ours(args.ours, paths, mode, threads, s, n)
+
+        if args.cli:
+            seq = textured_sequence(w, h, SEQ_FRAMES)
+            y4m = os.path.join(args.frames, f"textured_{w}x{h}_{SEQ_FRAMES}.y4m")
+            write_y4m(y4m, seq)
+            pairs = SEQ_FRAMES - 1
+
+            def run(threads):
+                return lambda: time_run(args.cli, y4m, pairs, threads, s)
+
+            if (w, h) == (640, 480):
+                ab("run 1t", size, ("DIS ultrafast 1t", lambda: time_dis_sequence(seq, 1, s, n)),
+                   ("reynoldsflow run --threads 1", run(1)), args.run_rounds)
+            if (w, h) == (1280, 720):
+                ab("run scale", size, ("reynoldsflow run --threads 1", run(1)),
+                   (f"reynoldsflow run --threads {cores}", run(cores)), args.run_rounds)
+        if args.only_run:
+            continue
 
         ab("1 thread", size, ("DIS ultrafast 1t", dis(1)), ("ours serial 1t (1 pass)", ours("serial", 1)))
         ab("1 thread", size, ("DIS ultrafast 1t", dis(1)),

@@ -2,6 +2,7 @@
 //! planes: the fields (Q16.16) and magnitudes (Q32.32) as exact f64 copies
 //! of the core's values, and the RGB8 representation.
 
+use fixed::types::U32F32;
 use rayon::prelude::*;
 use reynoldsflow_core::{
     ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, rgb,
@@ -231,6 +232,111 @@ pub fn represent_parallel(
     Ok(rep)
 }
 
+/// The RGB representation of pair after pair, with nothing else computed
+/// and nothing allocated once the buffers have grown to the frame size:
+/// the engine and the magnitudes kept for per-frame min–max live as long
+/// as this value (one per worker). Bit for bit the bytes of
+/// [`compute_fixed`].
+pub struct RgbEngine {
+    engine: Box<HostEngine>,
+    /// `[|v_d|, |v_c|]` of every pixel of the last pair (per-frame min–max
+    /// only): all that the byte step needs besides `fⁿ`, which waits in
+    /// the RGB frame's B channel.
+    magnitudes: Vec<[U32F32; 2]>,
+}
+
+impl Default for RgbEngine {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RgbEngine {
+    /// An engine with empty buffers.
+    pub fn new() -> Self {
+        Self {
+            // Boxed: the engine is too large for a worker's stack.
+            engine: Box::new(HostEngine::new()),
+            magnitudes: Vec::new(),
+        }
+    }
+
+    /// The representation of `(prev, next)` into `rgb` (resized to
+    /// `3 · width · height`), in one engine pass whatever the scaling:
+    /// `Fixed` gains stream the engine's rows straight into the bytes;
+    /// per-frame min–max keeps each pixel's two magnitudes and the frame's
+    /// extremes, then maps them to bytes. Fails as [`compute_fixed`] does.
+    pub fn represent(
+        &mut self,
+        prev: &Gray,
+        next: &Gray,
+        params: Params,
+        tile: Option<(usize, usize)>,
+        scaling: Scaling,
+        rgb: &mut Vec<u8>,
+    ) -> Result<(), HostError> {
+        let (plan, frames) = prepare(prev, next, params, tile)?;
+        let (width, height) = prev.size();
+        // Every byte is overwritten below; resizing a reused buffer of the same size is free.
+        rgb.resize(3 * width * height, 0);
+        let engine = &mut *self.engine;
+        if !matches!(scaling, Scaling::PerFrameMinMax) {
+            // Known gains: the core's `represent` streams rows into the bytes in one pass.
+            let pass = Pass::Represent(scaling, rgb);
+            return Ok(dispatch::run(
+                Isa::Best,
+                engine,
+                &plan,
+                &frames,
+                pass,
+                &mut (),
+            )?);
+        }
+        self.magnitudes.resize(width * height, [U32F32::ZERO; 2]);
+        let mut sink = (
+            ExtremesSink::default(),
+            KeptMagnitudes {
+                width,
+                magnitudes: &mut self.magnitudes,
+                rgb,
+            },
+        );
+        dispatch::run(Isa::Best, engine, &plan, &frames, Pass::All, &mut sink)?;
+        let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.0))?;
+        for (dst, &[m_d, m_c]) in rgb.chunks_exact_mut(3).zip(&self.magnitudes) {
+            let px = FlowPixel {
+                m_d,
+                m_c,
+                luma: dst[2],
+                ..FlowPixel::default()
+            };
+            dst.copy_from_slice(&reynoldsflow_core::rgb(&px, &scale_d, &scale_c));
+        }
+        Ok(())
+    }
+}
+
+/// The first step of per-frame min–max: each pixel's magnitudes into a
+/// plane, its `fⁿ` byte straight into the RGB frame.
+struct KeptMagnitudes<'a> {
+    width: usize,
+    magnitudes: &'a mut [[U32F32; 2]],
+    rgb: &'a mut [u8],
+}
+
+impl Sink for KeptMagnitudes<'_> {
+    #[inline(always)]
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let start = y * self.width + x;
+        let end = start + pixels.len();
+        let rgb = self.rgb[3 * start..3 * end].chunks_exact_mut(3);
+        for ((m, dst), px) in self.magnitudes[start..end].iter_mut().zip(rgb).zip(pixels) {
+            *m = [px.m_d, px.m_c];
+            dst[2] = px.luma;
+        }
+    }
+}
+
 /// Strip `index` of `plan` into `sink`, with the CPU's widest instructions.
 fn strip<S: Sink>(
     engine: &mut HostEngine,
@@ -307,6 +413,39 @@ mod tests {
             let parallel = represent_parallel(&a, &b, Params::DEFAULT, scaling, &pool).unwrap();
             assert!(parallel == serial.rep, "{scaling:?}");
         }
+    }
+
+    #[test]
+    fn rgb_engine_equals_the_serial_engine_while_reused() {
+        let mut engine = RgbEngine::new();
+        let mut rgb = Vec::new();
+        // Reused across sizes: larger, smaller, then larger again.
+        for (width, height, seed) in [(300, 45, 4), (17, 9, 6), (300, 45, 8)] {
+            let (a, b) = (frame(width, height, seed), frame(width, height, seed + 1));
+            for scaling in SCALINGS {
+                let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
+                for tile in [None, Some((17, 9))] {
+                    engine
+                        .represent(&a, &b, Params::DEFAULT, tile, scaling, &mut rgb)
+                        .unwrap();
+                    assert!(rgb == serial.rep, "{width}x{height} {tile:?} {scaling:?}");
+                }
+            }
+        }
+        let wide = engine.represent(
+            &frame(200, 4, 0),
+            &frame(200, 4, 1),
+            Params::DEFAULT,
+            Some((129, 4)),
+            Scaling::PerFrameMinMax,
+            &mut rgb,
+        );
+        assert!(matches!(
+            wide,
+            Err(HostError::Core(
+                reynoldsflow_core::Error::TileTooWide { .. }
+            ))
+        ));
     }
 
     #[test]

@@ -8,6 +8,12 @@
 //! and counts. At most `2 · threads` pairs are in flight (read but not yet
 //! delivered), so memory stays bounded whatever the sequence's length, and
 //! the output is the same for every thread count.
+//!
+//! Only what the outputs need is computed: when no output needs the fields
+//! ([`OutputSpec::needs_fields`]), a worker computes the representation's
+//! bytes alone ([`RgbEngine`]). Frames, engines and output buffers are
+//! reused from pair to pair ([`Pool`]), so a warm run allocates no frame-
+//! sized memory.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -19,10 +25,11 @@ use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
 
 use crate::cli::values::{EngineKind, ScaleArg, TileSize};
-use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame, y4m_header};
+use crate::fixed_engine::{self, RgbEngine};
+use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame_into, y4m_header};
 use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
-use crate::{Gray, HostError, fixed_engine};
+use crate::{Gray, HostError};
 
 /// Set when the user asks the process to stop (Ctrl-C): no new pair is
 /// started, pairs in flight finish, and the run reports the interruption.
@@ -102,18 +109,49 @@ impl Compute {
                 // One worker per pair already keeps the cores busy: each pair on one
                 // thread, in the single-pass path (the same bytes as `compute_fixed`).
                 let out = fixed_engine::compute_fixed_one_pass(prev, next, params, tile, scaling)
-                    .map_err(|e| match e {
-                    HostError::Core(
-                        c @ (CoreError::TileOutOfFrame | CoreError::TileTooWide { .. }),
-                    ) => HostError::invalid("--tile", c.to_string()),
-                    e => e,
-                })?;
+                    .map_err(tile_error)?;
                 Ok(PairFields {
                     planes: out.planes,
                     rep: out.rep,
                 })
             }
         }
+    }
+
+    /// The representation of one pair alone into `rgb`: the bytes of
+    /// [`Self::pair`]'s `rep`, computed by the fixed engine with the reused
+    /// buffers of `engine` and nothing else.
+    pub fn representation(
+        &self,
+        engine: &mut RgbEngine,
+        prev: &Gray,
+        next: &Gray,
+        rgb: &mut Vec<u8>,
+    ) -> Result<(), HostError> {
+        match self.fixed {
+            None => {
+                let fields = self.pair(prev, next)?;
+                rgb.clear();
+                rgb.extend_from_slice(&fields.rep);
+                Ok(())
+            }
+            Some((params, scaling)) => {
+                let tile = self.tile.map(|t| (t.width, t.height));
+                engine
+                    .represent(prev, next, params, tile, scaling, rgb)
+                    .map_err(tile_error)
+            }
+        }
+    }
+}
+
+/// A tile the core refuses is the fault of `--tile`.
+fn tile_error(e: HostError) -> HostError {
+    match e {
+        HostError::Core(c @ (CoreError::TileOutOfFrame | CoreError::TileTooWide { .. })) => {
+            HostError::invalid("--tile", c.to_string())
+        }
+        e => e,
     }
 }
 
@@ -231,6 +269,33 @@ pub struct Summary {
     pub stream_closed: bool,
 }
 
+/// Buffers handed back after use, for the next pair to reuse: once it
+/// holds as many as are in flight, a run allocates no more of them.
+struct Pool<T>(Mutex<Vec<T>>);
+
+impl<T> Pool<T> {
+    fn new() -> Self {
+        Self(Mutex::new(Vec::new()))
+    }
+
+    /// A used buffer, if one is free.
+    fn take(&self) -> Option<T> {
+        self.0.lock().expect("no panic while holding it").pop()
+    }
+
+    fn put(&self, item: T) {
+        self.0.lock().expect("no panic while holding it").push(item);
+    }
+}
+
+/// The buffers every thread of a run shares: frames (the reader fills
+/// them, the last worker to use one hands it back) and stream payloads
+/// (workers fill them, the writer hands them back).
+struct Buffers {
+    frames: Pool<Frame>,
+    payloads: Pool<Vec<u8>>,
+}
+
 /// A pair to compute.
 struct Job {
     index: usize,
@@ -297,6 +362,16 @@ pub fn process(
         } => (None, Some((spec, format, writer))),
     };
     let stream_spec = stream.as_ref().map(|(spec, format, _)| (*spec, *format));
+    let needs_fields = match (dir, stream_spec) {
+        (Some(dir), _) => dir.spec().needs_fields(),
+        (None, Some((spec, _))) => spec.image_needs_fields(),
+        (None, None) => unreachable!("a destination is a folder or a stream"),
+    };
+    let buffers = Buffers {
+        frames: Pool::new(),
+        payloads: Pool::new(),
+    };
+    let buffers = &buffers;
 
     std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
@@ -309,11 +384,20 @@ pub fn process(
                 token_rx,
                 reader_tx,
                 stop,
+                &buffers.frames,
             )
         });
         for _ in 0..threads {
             let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
             scope.spawn(move || {
+                let mut worker = Worker {
+                    compute,
+                    needs_fields,
+                    dir,
+                    stream: stream_spec,
+                    engine: RgbEngine::new(),
+                    rgb: Vec::new(),
+                };
                 loop {
                     // The lock is held only while waiting for the next job.
                     let Ok(job) = job_rx.lock().expect("no worker panics holding it").recv() else {
@@ -324,7 +408,7 @@ pub fn process(
                     }
                     // A panic must not leave the others waiting for this pair.
                     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        work(&job, compute, dir, stream_spec)
+                        worker.work(&job, buffers.payloads.take().unwrap_or_default())
                     }))
                     .unwrap_or_else(|_| {
                         Err(HostError::invalid(
@@ -341,6 +425,12 @@ pub fn process(
                         },
                         Err(e) => Msg::Failed(e),
                     };
+                    // The last of the two jobs (and the reader) to use a frame hands it back.
+                    for frame in [job.prev, job.next] {
+                        if let Some(frame) = Arc::into_inner(frame) {
+                            buffers.frames.put(frame);
+                        }
+                    }
                     if msg_tx.send(msg).is_err() {
                         return;
                     }
@@ -352,6 +442,7 @@ pub fn process(
             msg_rx,
             Some(token_tx),
             stop,
+            &buffers.payloads,
             dir,
             stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
             fps,
@@ -369,6 +460,7 @@ fn read_pairs(
     tokens: Receiver<()>,
     msgs: Sender<Msg>,
     stop: &AtomicBool,
+    pool: &Pool<Frame>,
 ) {
     let mut prev: Option<Arc<Frame>> = None;
     let mut frames = 0;
@@ -383,9 +475,10 @@ fn read_pairs(
         if max_frames.is_some_and(|m| frames >= m) {
             break;
         }
-        let frame = match source.next_frame() {
-            Ok(Some(frame)) => Arc::new(frame),
-            Ok(None) => break,
+        let mut frame = pool.take().unwrap_or_else(Frame::empty);
+        let frame = match source.next_frame_into(&mut frame) {
+            Ok(true) => Arc::new(frame),
+            Ok(false) => break,
             Err(e) => {
                 let _ = msgs.send(Msg::InputFailed(e));
                 return;
@@ -414,22 +507,62 @@ fn read_pairs(
     });
 }
 
-/// A worker's part: compute, then write the files or encode the stream frame.
-fn work(
-    job: &Job,
-    compute: &Compute,
-    dir: Option<&DirWriter>,
-    stream: Option<(&OutputSpec, StreamFormat)>,
-) -> Result<Vec<u8>, HostError> {
-    let fields = compute.pair(&job.prev.gray, &job.next.gray)?;
-    if let Some(dir) = dir {
-        dir.write(&job.prev.stem, &fields)?;
+/// A worker: what it computes, where results go, and its own buffers,
+/// reused for every pair it takes.
+struct Worker<'a> {
+    compute: &'a Compute,
+    /// Some output needs the fields; otherwise only the representation's
+    /// bytes are computed.
+    needs_fields: bool,
+    dir: Option<&'a DirWriter>,
+    stream: Option<(&'a OutputSpec, StreamFormat)>,
+    engine: RgbEngine,
+    /// The `--variant` image of the pair (when it is not the payload itself).
+    rgb: Vec<u8>,
+}
+
+impl Worker<'_> {
+    /// Compute one pair, then write its files or encode its stream frame
+    /// into `payload` (a used buffer, overwritten), which is returned.
+    fn work(&mut self, job: &Job, mut payload: Vec<u8>) -> Result<Vec<u8>, HostError> {
+        let (prev, next) = (&job.prev.gray, &job.next.gray);
+        if self.needs_fields {
+            let fields = self.compute.pair(prev, next)?;
+            if let Some(dir) = self.dir {
+                dir.write(&job.prev.stem, &fields)?;
+            }
+            payload.clear();
+            match self.stream {
+                Some((spec, StreamFormat::Rgb24)) => payload.extend(spec.image(&fields)),
+                Some((spec, StreamFormat::Y4m)) => {
+                    y4m_frame_into(&spec.image(&fields), &mut payload)
+                }
+                None => {}
+            }
+            return Ok(payload);
+        }
+        // Raw RGB goes out as computed; Y4M and files are made from the image.
+        let image = match self.stream {
+            Some((_, StreamFormat::Rgb24)) => &mut payload,
+            _ => &mut self.rgb,
+        };
+        self.compute
+            .representation(&mut self.engine, prev, next, image)?;
+        let spec = self.dir.map_or_else(
+            || self.stream.expect("a folder or a stream").0,
+            DirWriter::spec,
+        );
+        spec.arrange(image);
+        if let Some(dir) = self.dir {
+            dir.write_image(&job.prev.stem, prev.width, prev.height, image)?;
+        }
+        match self.stream {
+            Some((_, StreamFormat::Rgb24)) => {}
+            Some((_, StreamFormat::Y4m)) => y4m_frame_into(&self.rgb, &mut payload),
+            None => payload.clear(),
+        }
+        Ok(payload)
     }
-    Ok(match stream {
-        Some((spec, StreamFormat::Rgb24)) => spec.image(&fields),
-        Some((spec, StreamFormat::Y4m)) => y4m_frame(&spec.image(&fields)),
-        None => Vec::new(),
-    })
 }
 
 /// A computed result waiting for its turn: stem, frame size, stream bytes.
@@ -441,6 +574,7 @@ fn collect<'w, 'o>(
     msgs: Receiver<Msg>,
     mut tokens: Option<SyncSender<()>>,
     stop: &AtomicBool,
+    payloads: &Pool<Vec<u8>>,
     dir: Option<&DirWriter>,
     mut stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
     fps: (u32, u32),
@@ -503,7 +637,9 @@ fn collect<'w, 'o>(
                 }
             }
             on_output();
-            last = Some((stem, payload));
+            if let Some((_, used)) = last.replace((stem, payload)) {
+                payloads.put(used);
+            }
             next += 1;
             if let Some(t) = &tokens {
                 let _ = t.send(());

@@ -406,6 +406,74 @@ fn every_output_kind_variants_streams_and_keep_count() {
     }
 }
 
+#[test]
+fn lean_and_full_paths_and_every_thread_count_give_the_same_bytes() {
+    // Wider than one 128-px strip, so strips meet inside the frame.
+    let (w, h) = (200, 48);
+    let f: Vec<Gray> = (0..6).map(|t| moving_frame(w, h, t)).collect();
+    let tmp = tempfile::tempdir().unwrap();
+    let video = tmp.path().join("clip.y4m");
+    fs::write(&video, y4m(&f, "420jpeg")).unwrap();
+    for scale in ["minmax", "fixed:8,32"] {
+        // A stream: the same bytes with one worker and with two.
+        let stream = |threads: &str| {
+            let res = run(&args![
+                "run",
+                video,
+                "--out",
+                "-",
+                "--format",
+                "rgb24",
+                "--scale",
+                scale,
+                "--threads",
+                threads
+            ]);
+            ok(&res);
+            res.stdout
+        };
+        let one = stream("1");
+        assert_eq!(one.len(), 5 * 3 * w * h, "{scale}");
+        assert!(one == stream("2"), "{scale}: 1 thread vs 2");
+        // Files: the representation alone (computed without the fields) and
+        // with every field output (computed from them) are the same PNGs.
+        let lean = tmp.path().join(format!("lean-{scale}"));
+        let full = tmp.path().join(format!("full-{scale}"));
+        ok(&run(&args![
+            "run",
+            video,
+            "--out",
+            lean,
+            "--scale",
+            scale,
+            "--threads",
+            "2"
+        ]));
+        ok(&run(&args![
+            "run",
+            video,
+            "--out",
+            full,
+            "--scale",
+            scale,
+            "--viz",
+            "--npy",
+            "--threads",
+            "1"
+        ]));
+        assert_eq!(pngs(&lean).len(), 5);
+        for name in pngs(&lean) {
+            let bytes = fs::read(lean.join(&name)).unwrap();
+            assert!(
+                bytes == fs::read(full.join(&name)).unwrap(),
+                "{scale}: {name}"
+            );
+        }
+        let frame = 3 * w * h;
+        assert_eq!(rgb(&lean.join("000004.png")), one[4 * frame..], "{scale}");
+    }
+}
+
 /// Run with `args`; expect exit status `code`, one line naming
 /// every needle.
 #[track_caller]

@@ -164,16 +164,40 @@ impl OutputSpec {
         self.rep || self.viz || !self.npy.is_empty() || !self.flo.is_empty()
     }
 
+    /// Whether the `--variant` image is made from the fields (the colour
+    /// wheel) rather than from the representation's bytes alone.
+    pub fn image_needs_fields(&self) -> bool {
+        self.variant == Variant::Hsv
+    }
+
+    /// Whether any output of a result needs the fields, not only the
+    /// representation's bytes (which can be computed without them).
+    pub fn needs_fields(&self) -> bool {
+        (self.rep && self.image_needs_fields())
+            || self.viz
+            || !self.npy.is_empty()
+            || !self.flo.is_empty()
+    }
+
     /// The RGB8 image of the `--variant`.
     pub fn image(&self, f: &PairFields) -> Vec<u8> {
+        if self.image_needs_fields() {
+            return self.hsv(f);
+        }
         let mut rgb = f.rep.clone();
+        self.arrange(&mut rgb);
+        rgb
+    }
+
+    /// Turn the representation `[|v_d|, |v_c|, f]` into the `--variant`'s
+    /// image in place; a no-op for the colour wheel, which is made from
+    /// the fields instead ([`Self::image_needs_fields`]).
+    pub fn arrange(&self, rgb: &mut [u8]) {
         match self.variant {
-            Variant::Dc => {}
+            Variant::Dc | Variant::Hsv => {}
             Variant::Dc0 => rgb.chunks_exact_mut(3).for_each(|p| p[1] = 0),
             Variant::Cd => rgb.chunks_exact_mut(3).for_each(|p| p.swap(0, 1)),
-            Variant::Hsv => return self.hsv(f),
         }
-        rgb
     }
 
     fn hsv(&self, f: &PairFields) -> Vec<u8> {
@@ -200,8 +224,7 @@ impl OutputSpec {
         let (w, h) = (f.planes.width, f.planes.height);
         let mut files = Vec::new();
         if self.rep {
-            let png = image_io::encode_png(w, h, &self.image(f))?;
-            files.push((PathBuf::from(format!("{stem}.png")), png));
+            files.push(image_file(stem, w, h, &self.image(f))?);
         }
         if self.viz {
             let png = image_io::encode_png(w, h, &self.hsv(f))?;
@@ -237,6 +260,17 @@ impl OutputSpec {
             self.hsv_max
         )
     }
+}
+
+/// The file `STEM.png` of the `--variant` image.
+fn image_file(
+    stem: &str,
+    width: usize,
+    height: usize,
+    image: &[u8],
+) -> Result<(PathBuf, Vec<u8>), HostError> {
+    let png = image_io::encode_png(width, height, image)?;
+    Ok((PathBuf::from(format!("{stem}.png")), png))
 }
 
 /// A `.npy` of shape `(height, width, 2)`, float64, C order: `[..., 0]` is
@@ -302,8 +336,16 @@ pub fn y4m_header(width: usize, height: usize, fps: (u32, u32)) -> String {
 /// `Cb = 128 + (−38R − 74G + 112B + 128) >> 8`,
 /// `Cr = 128 + (112R − 94G − 18B + 128) >> 8`.
 pub fn y4m_frame(rgb: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    y4m_frame_into(rgb, &mut out);
+    out
+}
+
+/// [`y4m_frame`] into `out` (cleared first), reusing its memory.
+pub fn y4m_frame_into(rgb: &[u8], out: &mut Vec<u8>) {
     let n = rgb.len() / 3;
-    let mut out = Vec::with_capacity(6 + 3 * n);
+    out.clear();
+    out.reserve(6 + 3 * n);
     out.extend_from_slice(b"FRAME\n");
     let planes: [fn(i32, i32, i32) -> i32; 3] = [
         |r, g, b| 16 + ((66 * r + 129 * g + 25 * b + 128) >> 8),
@@ -317,7 +359,6 @@ pub fn y4m_frame(rgb: &[u8]) -> Vec<u8> {
             }),
         );
     }
-    out
 }
 
 /// The environment variable of the crash test hook: after this many
@@ -403,11 +444,36 @@ impl DirWriter {
         &self.root
     }
 
+    /// What is written per result.
+    pub fn spec(&self) -> &OutputSpec {
+        &self.spec
+    }
+
     /// Write every file of the result labelled `stem`.
     pub fn write(&self, stem: &str, fields: &PairFields) -> Result<(), HostError> {
-        let files = self.spec.files(stem, fields)?;
-        abort_hook(&self.root, &files);
-        for (rel, bytes) in &files {
+        self.write_files(&self.spec.files(stem, fields)?)
+    }
+
+    /// Write the result labelled `stem` of a spec that needs no fields
+    /// ([`OutputSpec::needs_fields`]): `STEM.png` of `image`, the
+    /// `--variant` image of `width × height` pixels.
+    pub fn write_image(
+        &self,
+        stem: &str,
+        width: usize,
+        height: usize,
+        image: &[u8],
+    ) -> Result<(), HostError> {
+        debug_assert!(!self.spec.needs_fields(), "{:?}", self.spec);
+        if !self.spec.rep {
+            return Ok(());
+        }
+        self.write_files(&[image_file(stem, width, height, image)?])
+    }
+
+    fn write_files(&self, files: &[(PathBuf, Vec<u8>)]) -> Result<(), HostError> {
+        abort_hook(&self.root, files);
+        for (rel, bytes) in files {
             atomic::write_file(&self.root.join(rel), bytes)?;
         }
         Ok(())

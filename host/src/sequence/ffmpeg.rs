@@ -169,14 +169,19 @@ impl FfmpegSource {
 
 impl FrameSource for FfmpegSource {
     fn next_frame(&mut self) -> Result<Option<Frame>, HostError> {
+        let mut frame = Frame::empty();
+        Ok(self.next_frame_into(&mut frame)?.then_some(frame))
+    }
+
+    fn next_frame_into(&mut self, frame: &mut Frame) -> Result<bool, HostError> {
         if self.finished {
-            return Ok(None);
+            return Ok(false);
         }
         let y4m = self.y4m.as_mut().expect("open until finished");
-        match y4m.next_frame() {
-            Ok(Some(frame)) => Ok(Some(frame)),
+        match y4m.next_frame_into(frame) {
+            Ok(true) => Ok(true),
             // The end of the pipe: a clean end only if ffmpeg says so.
-            Ok(None) => self.finish().map(|()| None),
+            Ok(false) => self.finish().map(|()| false),
             Err(e) => Err(self.finish().err().unwrap_or(e)),
         }
     }

@@ -39,6 +39,19 @@ pub trait FrameSource: Send {
     /// input and the frame.
     fn next_frame(&mut self) -> Result<Option<Frame>, HostError>;
 
+    /// The next frame into `frame`, reusing its buffers where the source
+    /// can (a long run then allocates no frame memory once warm); `false`
+    /// at the end of the sequence, `frame` unspecified after an error.
+    fn next_frame_into(&mut self, frame: &mut Frame) -> Result<bool, HostError> {
+        Ok(match self.next_frame()? {
+            Some(next) => {
+                *frame = next;
+                true
+            }
+            None => false,
+        })
+    }
+
     /// How many frames the whole sequence has, when known before reading it
     /// (for progress display only).
     fn frame_count_hint(&self) -> Option<usize> {
@@ -55,7 +68,31 @@ pub trait FrameSource: Send {
 /// The label of frame `index` of a video-like input: six digits at least,
 /// so the labels sort in frame order as plain strings.
 pub fn index_stem(index: usize) -> String {
-    format!("{index:06}")
+    let mut stem = String::new();
+    write_index_stem(&mut stem, index);
+    stem
+}
+
+/// [`index_stem`] into `stem`, reusing its memory.
+pub fn write_index_stem(stem: &mut String, index: usize) {
+    use std::fmt::Write;
+    stem.clear();
+    write!(stem, "{index:06}").expect("writing to a String");
+}
+
+impl Frame {
+    /// A frame with no pixels yet (not a valid [`Gray`]), for
+    /// [`FrameSource::next_frame_into`] to fill.
+    pub(crate) fn empty() -> Self {
+        Self {
+            gray: Gray {
+                width: 0,
+                height: 0,
+                pixels: Vec::new(),
+            },
+            stem: String::new(),
+        }
+    }
 }
 
 /// A refused input: `path: problem` (an [`HostError::Io`] of kind

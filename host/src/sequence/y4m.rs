@@ -8,8 +8,8 @@
 use std::io::{BufRead, Read};
 use std::path::PathBuf;
 
-use super::{Frame, FrameSource, index_stem, input_error, read_full};
-use crate::{Gray, HostError};
+use super::{Frame, FrameSource, input_error, read_full, write_index_stem};
+use crate::HostError;
 
 /// The first bytes of every Y4M stream.
 pub const MAGIC: &[u8] = b"YUV4MPEG2";
@@ -178,11 +178,11 @@ impl Y4mSource {
         &self.header
     }
 
-    fn read_frame(&mut self) -> Result<Option<Frame>, String> {
+    fn read_frame(&mut self, frame: &mut Frame) -> Result<bool, String> {
         let index = self.index;
         let line = match read_line(&mut *self.reader) {
             Ok(Some(line)) => line,
-            Ok(None) => return Ok(None),
+            Ok(None) => return Ok(false),
             Err(e) => return Err(format!("frame {index}: {e} (truncated file?)")),
         };
         if !line.starts_with(b"FRAME") {
@@ -193,8 +193,10 @@ impl Y4mSource {
         }
         let (w, h) = (self.header.width, self.header.height);
         let frame_bytes = w * h + self.header.extra_bytes;
-        let mut pixels = vec![0u8; w * h];
-        let got = read_full(&mut *self.reader, &mut pixels).map_err(|e| e.to_string())?;
+        // A reused buffer of the frame's size is overwritten as it stands.
+        let pixels = &mut frame.gray.pixels;
+        pixels.resize(w * h, 0);
+        let got = read_full(&mut *self.reader, pixels).map_err(|e| e.to_string())?;
         let mut got_extra = 0;
         if got == pixels.len() {
             // Skip the chroma planes through a bounded scratch buffer.
@@ -218,12 +220,11 @@ impl Y4mSource {
                 self.header.chroma
             ));
         }
-        let gray = Gray::new(w, h, pixels).map_err(|e| e.to_string())?;
+        // The header has checked that both sides are at least 1.
+        (frame.gray.width, frame.gray.height) = (w, h);
+        write_index_stem(&mut frame.stem, index);
         self.index += 1;
-        Ok(Some(Frame {
-            gray,
-            stem: index_stem(index),
-        }))
+        Ok(true)
     }
 }
 
@@ -232,9 +233,19 @@ impl FrameSource for Y4mSource {
         if self.done {
             return Ok(None);
         }
-        let frame = self.read_frame().map_err(|e| input_error(&self.name, e))?;
-        self.done = frame.is_none();
-        Ok(frame)
+        let mut frame = Frame::empty();
+        Ok(self.next_frame_into(&mut frame)?.then_some(frame))
+    }
+
+    fn next_frame_into(&mut self, frame: &mut Frame) -> Result<bool, HostError> {
+        if self.done {
+            return Ok(false);
+        }
+        let read = self
+            .read_frame(frame)
+            .map_err(|e| input_error(&self.name, e))?;
+        self.done = !read;
+        Ok(read)
     }
 
     fn frame_count_hint(&self) -> Option<usize> {
