@@ -325,6 +325,8 @@ struct KeptMagnitudes<'a> {
 }
 
 impl Sink for KeptMagnitudes<'_> {
+    const FIELDS: bool = false;
+
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let start = y * self.width + x;
@@ -357,6 +359,8 @@ struct StripRgb<'a, 'b> {
 }
 
 impl Sink for StripRgb<'_, '_> {
+    const FIELDS: bool = false;
+
     fn row(&mut self, y: usize, _x: usize, pixels: &[FlowPixel]) {
         if let Some(row) = self.rows.get_mut(y) {
             for (dst, px) in row.chunks_exact_mut(3).zip(pixels) {
