@@ -78,6 +78,9 @@ pub struct DatasetArgs {
     /// The outputs.
     #[command(flatten)]
     pub output: OutputArgs,
+    /// Input limits.
+    #[command(flatten)]
+    pub limits: super::limits::LimitArgs,
 }
 
 /// One video or frame folder.
@@ -257,6 +260,7 @@ fn failure_line(item: &Item, why: &str) -> String {
 
 /// Run the subcommand.
 pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
+    args.limits.apply();
     let compute = args.engine.compute.compute()?;
     let spec = args.output.spec();
     if !spec.writes_anything() {
