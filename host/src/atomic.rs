@@ -26,12 +26,11 @@ fn stage(dir: &Path, name: &str, bytes: &[u8]) -> Result<NamedTempFile, HostErro
     let mut tmp = builder
         .tempfile_in(dir)
         .map_err(|e| HostError::io(dir, e))?;
-    tmp.write_all(bytes)
-        .map_err(|e| HostError::io(tmp.path(), e))?;
+    // Errors name the file being made, not its hidden temp (which the drop removes).
+    let failed = |e| HostError::io(dir.join(name), e);
+    tmp.write_all(bytes).map_err(failed)?;
     // Flush before the rename, so a crash cannot expose an empty file under the final name.
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| HostError::io(tmp.path(), e))?;
+    tmp.as_file().sync_all().map_err(failed)?;
     Ok(tmp)
 }
 

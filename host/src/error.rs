@@ -26,6 +26,10 @@ pub enum ImageProblem {
     /// The decoder refused the data.
     #[error("cannot decode: {0}")]
     Decode(String),
+    /// The header states a frame larger than the pixel limit
+    /// ([`crate::limits`]); nothing of its size was allocated.
+    #[error("{0}")]
+    TooLarge(String),
 }
 
 /// Everything that can go wrong on the host side.

@@ -12,9 +12,11 @@ use std::path::Path;
 
 use image::codecs::png::PngEncoder;
 use image::codecs::pnm::PnmDecoder;
-use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
+use image::{
+    DynamicImage, ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageReader,
+};
 
-use crate::{Gray, HostError, ImageProblem, atomic};
+use crate::{Gray, HostError, ImageProblem, atomic, limits};
 
 /// An RGB8 image, row-major, `3 · width · height` bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -41,7 +43,16 @@ fn decode_error(e: image::ImageError) -> ImageProblem {
     ImageProblem::Decode(e.to_string())
 }
 
+/// The decoder, if the size its header states is within [`limits`].
+fn within_limit<D: ImageDecoder>(decoder: D) -> Result<D, ImageProblem> {
+    let (w, h) = decoder.dimensions();
+    limits::check_frame_size(w as usize, h as usize).map_err(ImageProblem::TooLarge)?;
+    Ok(decoder)
+}
+
 /// Decode any supported container into an image of 8-bit samples or fail.
+/// The header's size is checked against [`limits`] before the pixels are
+/// decoded, so a header claiming a huge image costs nothing.
 fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
     let format = sniff(bytes).ok_or(ImageProblem::UnknownFormat)?;
     let image = if format == ImageFormat::Pnm {
@@ -50,9 +61,12 @@ fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
         if maxval != 255 {
             return Err(ImageProblem::Maxval { maxval });
         }
-        DynamicImage::from_decoder(decoder).map_err(decode_error)?
+        DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)?
     } else {
-        image::load_from_memory_with_format(bytes, format).map_err(decode_error)?
+        let decoder = ImageReader::with_format(Cursor::new(bytes), format)
+            .into_decoder()
+            .map_err(decode_error)?;
+        DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)?
     };
     match image {
         DynamicImage::ImageLuma8(_)

@@ -25,6 +25,7 @@ pub mod fixed_engine;
 pub mod flow_planes;
 pub mod gray;
 pub mod image_io;
+pub mod limits;
 pub mod npy;
 pub mod outputs;
 pub mod pair_pool;

@@ -50,10 +50,56 @@ pub fn write(path: &Path, height: usize, width: usize, data: &[f64]) -> Result<(
     atomic::write_file(path, &encode(height, width, data))
 }
 
+/// The shape a `.npy` header states, read before npyz parses it.
+fn header_shape(bytes: &[u8]) -> Option<Vec<u64>> {
+    let rest = bytes.strip_prefix(b"\x93NUMPY")?;
+    let (&major, rest) = rest.split_first()?;
+    let rest = rest.get(1..)?;
+    let (len, rest) = match major {
+        1 => (
+            usize::from(u16::from_le_bytes(rest.get(..2)?.try_into().ok()?)),
+            &rest[2..],
+        ),
+        2 | 3 => (
+            u32::from_le_bytes(rest.get(..4)?.try_into().ok()?) as usize,
+            &rest[4..],
+        ),
+        _ => return None,
+    };
+    let header = std::str::from_utf8(rest.get(..len)?).ok()?;
+    let key = header
+        .find("'shape'")
+        .or_else(|| header.find("\"shape\""))?;
+    let tuple = header[key + 7..].trim_start().strip_prefix(':')?;
+    let tuple = tuple.trim_start().strip_prefix('(')?;
+    let tuple = &tuple[..tuple.find(')')?];
+    tuple
+        .split(',')
+        .map(str::trim)
+        .filter(|axis| !axis.is_empty())
+        .map(|axis| axis.parse().ok())
+        .collect()
+}
+
+/// Open a `.npy` held in memory, refusing a shape whose values could not
+/// be in the file before npyz sees it: npyz multiplies the axes unchecked
+/// (an overflow panic, or a wrong count; found by fuzz/npy).
+pub(crate) fn open(bytes: &[u8]) -> Result<npyz::NpyFile<&[u8]>, String> {
+    let shape = header_shape(bytes).ok_or("not a .npy file: no readable NumPy header")?;
+    let values = shape.iter().try_fold(1u64, |n, &axis| n.checked_mul(axis));
+    if values.is_none_or(|n| n.saturating_mul(8) > bytes.len() as u64) {
+        return Err(format!(
+            "shape {shape:?} needs more data than the file's {} bytes",
+            bytes.len()
+        ));
+    }
+    npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))
+}
+
 /// Parse a 2-D float64 `.npy` (either byte order; Fortran order is
 /// transposed into row-major).
 pub fn decode(bytes: &[u8]) -> Result<Array2, String> {
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))?;
+    let npy = open(bytes)?;
     let [height, width] = *npy.shape() else {
         return Err(format!(
             "array has shape {:?}; a 2-D (H, W) array is needed",
@@ -141,5 +187,26 @@ mod tests {
         w.finish().unwrap();
         assert!(decode(&bytes).unwrap_err().contains("2-D"));
         assert!(decode(b"garbage").unwrap_err().contains("not a .npy"));
+    }
+
+    /// fuzz/npy: a shape of 2³² × 2³² overflowed npyz's element count.
+    #[test]
+    fn a_shape_larger_than_the_file_is_refused_before_npyz() {
+        let header =
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (4294967296, 4294967296), }";
+        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+        bytes.extend((header.len() as u16 + 1).to_le_bytes());
+        bytes.extend(header.bytes());
+        bytes.push(b'\n');
+        bytes.extend([0; 48]);
+        let err = decode(&bytes).unwrap_err();
+        assert!(
+            err.contains("shape [4294967296, 4294967296] needs more data"),
+            "{err}"
+        );
+        assert!(crate::outputs::decode_npy_xy(&bytes).is_err());
+        // A plain shape that the data cannot fill is refused the same way.
+        let short = encode(2, 3, &[0.0; 6]);
+        assert!(decode(&short[..short.len() - 8]).is_err());
     }
 }

@@ -110,6 +110,9 @@ pub struct DatasetArgs {
     /// The outputs.
     #[command(flatten)]
     pub output: OutputArgs,
+    /// Input limits.
+    #[command(flatten)]
+    pub limits: super::limits::LimitArgs,
 }
 
 /// One video or frame folder.
@@ -481,6 +484,7 @@ fn which_shard(args: &DatasetArgs) -> Result<Shard, HostError> {
 
 /// Run the subcommand.
 pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
+    args.limits.apply();
     let shard = which_shard(args)?;
     let threads = args.engine.threads();
     // Checked before anything is created; the workers' share is set below.

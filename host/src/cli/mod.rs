@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand};
 pub mod budget;
 pub mod dataset;
 pub mod eval;
+pub mod limits;
 pub mod pair;
 mod progress;
 pub mod run;

@@ -25,10 +25,14 @@ pub struct PairArgs {
     /// The engine and its parameters.
     #[command(flatten)]
     pub compute: ComputeArgs,
+    /// Input limits.
+    #[command(flatten)]
+    pub limits: super::limits::LimitArgs,
 }
 
 /// Run the subcommand.
 pub fn run(args: &PairArgs) -> Result<(), HostError> {
+    args.limits.apply();
     let compute = args.compute.compute()?;
     let prev = image_io::read_gray(&args.f0)?;
     let next = image_io::read_gray(&args.f1)?;

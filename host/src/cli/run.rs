@@ -189,6 +189,9 @@ pub struct RunArgs {
     /// The outputs.
     #[command(flatten)]
     pub output: OutputArgs,
+    /// Input limits.
+    #[command(flatten)]
+    pub limits: super::limits::LimitArgs,
 }
 
 fn parse_size(s: &str) -> Result<(usize, usize), String> {
@@ -219,6 +222,7 @@ pub fn count(n: usize, unit: &str) -> String {
 
 /// Run the subcommand.
 pub fn run(args: &RunArgs) -> Result<(), HostError> {
+    args.limits.apply();
     let compute = args.engine.compute.compute()?;
     let spec = args.output.spec();
     let to_stdout = args.out.as_os_str() == "-";

@@ -58,12 +58,18 @@ pub fn decode(bytes: &[u8]) -> Result<Flo, String> {
     let (Ok(width), Ok(height)) = (usize::try_from(w), usize::try_from(h)) else {
         return Err(format!("negative size {w}x{h}"));
     };
-    let n = width * height;
-    if bytes.len() != 12 + 8 * n {
+    // Checked: two i32 sides make 8·W·H overflow (found by fuzz/flo).
+    let n = width.checked_mul(height);
+    let expected = n.and_then(|n| n.checked_mul(8)?.checked_add(12));
+    let (Some(n), Some(expected)) = (n, expected) else {
         return Err(format!(
-            "{} bytes for a {width}x{height} field (expected {})",
+            "size {width}x{height} is too large for a .flo file"
+        ));
+    };
+    if bytes.len() != expected {
+        return Err(format!(
+            "{} bytes for a {width}x{height} field (expected {expected})",
             bytes.len(),
-            12 + 8 * n
         ));
     }
     let value = |i: usize| f32::from_le_bytes(word(3 + i).expect("length checked"));
@@ -90,5 +96,14 @@ mod tests {
         assert_eq!(flo.v, [1.0; 6]);
         assert!(decode(&bytes[..20]).is_err());
         assert!(decode(b"garbage-garbage-").is_err());
+    }
+
+    /// fuzz/flo: sides of 2³¹ − 1 overflowed the expected length.
+    #[test]
+    fn huge_sides_are_an_error_not_an_overflow() {
+        let mut bytes = encode(1, 1, &[0.0], &[0.0]).unwrap();
+        bytes[4..12].copy_from_slice(&[0xff, 0xff, 0xff, 0x7f, 0xff, 0xff, 0xff, 0x7f]);
+        let err = decode(&bytes).unwrap_err();
+        assert!(err.contains("2147483647x2147483647 is too large"), "{err}");
     }
 }

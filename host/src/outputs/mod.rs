@@ -296,7 +296,7 @@ pub fn encode_npy_xy(height: usize, width: usize, x: &[f64], y: &[f64]) -> Vec<u
 
 /// Parse a `.npy` of shape `(H, W, 2)` float64: `(H, W, x plane, y plane)`.
 pub fn decode_npy_xy(bytes: &[u8]) -> Result<(usize, usize, Vec<f64>, Vec<f64>), String> {
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))?;
+    let npy = crate::npy::open(bytes)?;
     let [h, w, 2] = *npy.shape() else {
         return Err(format!("shape {:?} is not (H, W, 2)", npy.shape()));
     };

@@ -6,7 +6,7 @@ use std::io::Read;
 use std::path::PathBuf;
 
 use super::{Frame, FrameSource, index_stem, input_error, read_full};
-use crate::{Gray, HostError};
+use crate::{Gray, HostError, limits};
 
 /// Raw frames read from any reader.
 pub struct RawSource {
@@ -16,6 +16,8 @@ pub struct RawSource {
     height: usize,
     index: usize,
     count_hint: Option<usize>,
+    /// The input's length when opened, when known (a file).
+    total_bytes: Option<u64>,
     done: bool,
 }
 
@@ -27,12 +29,13 @@ impl RawSource {
         width: usize,
         height: usize,
     ) -> Result<Self, HostError> {
-        if width == 0 || height == 0 || width.checked_mul(height).is_none_or(|n| n > 1 << 32) {
+        if width == 0 || height == 0 {
             return Err(HostError::invalid(
                 "--raw",
                 format!("{width}x{height} is not a usable frame size"),
             ));
         }
+        limits::check_frame_size(width, height).map_err(|e| HostError::invalid("--raw", e))?;
         Ok(Self {
             name,
             reader,
@@ -40,6 +43,7 @@ impl RawSource {
             height,
             index: 0,
             count_hint: None,
+            total_bytes: None,
             done: false,
         })
     }
@@ -48,6 +52,7 @@ impl RawSource {
     pub fn set_total_bytes(&mut self, len: Option<u64>) {
         let frame = (self.width * self.height) as u64;
         self.count_hint = len.map(|l| (l / frame) as usize);
+        self.total_bytes = len;
     }
 }
 
@@ -62,6 +67,17 @@ impl FrameSource for RawSource {
             read_full(&mut *self.reader, &mut pixels).map_err(|e| HostError::io(&self.name, e))?;
         if got == 0 {
             self.done = true;
+            let read = (self.index * size) as u64;
+            if let Some(len) = self.total_bytes.filter(|&len| read < len) {
+                // A file cut at a frame boundary while being read: not a shorter input.
+                return Err(input_error(
+                    &self.name,
+                    format!(
+                        "the input ends after frame {} at byte {read}, but the file had {len} bytes when opened: it was truncated while being read",
+                        self.index
+                    ),
+                ));
+            }
             return Ok(None);
         }
         if got < size {

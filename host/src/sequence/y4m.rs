@@ -9,7 +9,7 @@ use std::io::{BufRead, Read};
 use std::path::PathBuf;
 
 use super::{Frame, FrameSource, input_error, read_full, write_index_stem};
-use crate::HostError;
+use crate::{HostError, limits};
 
 /// The first bytes of every Y4M stream.
 pub const MAGIC: &[u8] = b"YUV4MPEG2";
@@ -85,9 +85,7 @@ pub fn parse_header(line: &[u8]) -> Result<Header, String> {
     let (Some(width), Some(height)) = (width, height) else {
         return Err("the Y4M header lacks a valid width (W) or height (H)".to_owned());
     };
-    if width.checked_mul(height).is_none_or(|n| n > 1 << 32) {
-        return Err(format!("frame size {width}x{height} is too large"));
-    }
+    limits::check_frame_size(width, height)?;
     let extra_bytes = match extra_bytes(&chroma, width, height) {
         Some(n) => n,
         None => {
@@ -140,6 +138,10 @@ pub struct Y4mSource {
     index: usize,
     scratch: Vec<u8>,
     count_hint: Option<usize>,
+    /// The file's length when opened, and the bytes read since: a clean
+    /// end before that length means the file shrank while being read.
+    file_len: Option<u64>,
+    position: u64,
     done: bool,
 }
 
@@ -165,10 +167,12 @@ impl Y4mSource {
         Ok(Self {
             name,
             reader,
+            position: header.header_bytes as u64,
             header,
             index: 0,
             scratch: Vec::new(),
             count_hint,
+            file_len,
             done: false,
         })
     }
@@ -178,11 +182,24 @@ impl Y4mSource {
         &self.header
     }
 
+    /// A clean end of input, unless the file was longer when opened (a
+    /// file truncated at a frame boundary would otherwise pass as a shorter
+    /// video).
+    fn end(&self) -> Result<bool, String> {
+        match self.file_len {
+            Some(len) if self.position < len => Err(format!(
+                "the input ends after frame {} at byte {}, but the file had {len} bytes when opened: it was truncated while being read",
+                self.index, self.position
+            )),
+            _ => Ok(false),
+        }
+    }
+
     fn read_frame(&mut self, frame: &mut Frame) -> Result<bool, String> {
         let index = self.index;
         let line = match read_line(&mut *self.reader) {
             Ok(Some(line)) => line,
-            Ok(None) => return Ok(false),
+            Ok(None) => return self.end(),
             Err(e) => return Err(format!("frame {index}: {e} (truncated file?)")),
         };
         if !line.starts_with(b"FRAME") {
@@ -223,6 +240,7 @@ impl Y4mSource {
         // The header has checked that both sides are at least 1.
         (frame.gray.width, frame.gray.height) = (w, h);
         write_index_stem(&mut frame.stem, index);
+        self.position += (line.len() + 1 + frame_bytes) as u64;
         self.index += 1;
         Ok(true)
     }
