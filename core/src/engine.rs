@@ -29,7 +29,7 @@ pub const HALO: usize = 7;
 /// Everything the representation knows about one pixel.
 ///
 /// The fields are computed only for sinks that ask for them
-/// ([`Sink::FIELDS`]); for the others they are zero.
+/// ([`Sink::reads_fields`]); for the others they are zero.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlowPixel {
@@ -63,15 +63,21 @@ impl FlowPixel {
 pub trait Sink {
     /// Whether this sink reads `v_c` and `v_d` (the magnitudes and the
     /// luma are always there). A sink that only makes bytes or extremes says
-    /// `false`, and the engine skips the fields' conversions.
-    const FIELDS: bool = true;
+    /// `false`, and the engine skips the fields' conversions. Asked once per
+    /// output row (a method, not a constant, so `dyn Sink` works).
+    fn reads_fields(&self) -> bool {
+        true
+    }
 
     /// Pixels `[x, x + pixels.len())` of frame row `y`.
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]);
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
-    const FIELDS: bool = S::FIELDS;
+    #[inline(always)]
+    fn reads_fields(&self) -> bool {
+        (**self).reads_fields()
+    }
 
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
@@ -81,14 +87,19 @@ impl<S: Sink + ?Sized> Sink for &mut S {
 
 /// The sink that does nothing.
 impl Sink for () {
-    const FIELDS: bool = false;
+    fn reads_fields(&self) -> bool {
+        false
+    }
 
     fn row(&mut self, _y: usize, _x: usize, _pixels: &[FlowPixel]) {}
 }
 
 /// Both sinks see every row.
 impl<A: Sink, B: Sink> Sink for (A, B) {
-    const FIELDS: bool = A::FIELDS || B::FIELDS;
+    #[inline(always)]
+    fn reads_fields(&self) -> bool {
+        self.0.reads_fields() || self.1.reads_fields()
+    }
 
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
@@ -291,6 +302,7 @@ impl<const COLS: usize> Engine<COLS> {
         for (ring, out) in self.sums.iter().zip(self.products.rows.iter_mut()) {
             vertical_binomial(ring.rows(o - 2), out, n, HALO);
         }
+        let fields = sink.reads_fields();
         let [a, b, c, ph, pl, qh, ql] = &self.products.rows;
         let (vx, vy, luma) = (self.v[0].row(o), self.v[1].row(o), self.p0.row(o));
         let width = n.saturating_sub(2 * HALO);
@@ -305,7 +317,7 @@ impl<const COLS: usize> Engine<COLS> {
             };
             let solved = solve(config, sums);
             let v = [vx[i], vy[i]];
-            let (v_c, v_d) = match S::FIELDS {
+            let (v_c, v_d) = match fields {
                 true => (
                     v.map(|v| curl_free_q16(config, v)),
                     divergence_free_q16(config, &solved),

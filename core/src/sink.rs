@@ -139,7 +139,9 @@ impl<'a> RgbSink<'a> {
 }
 
 impl Sink for RgbSink<'_> {
-    const FIELDS: bool = false;
+    fn reads_fields(&self) -> bool {
+        false
+    }
 
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
@@ -174,7 +176,9 @@ impl ExtremesSink {
 }
 
 impl Sink for ExtremesSink {
-    const FIELDS: bool = false;
+    fn reads_fields(&self) -> bool {
+        false
+    }
 
     #[inline(always)]
     fn row(&mut self, _y: usize, _x: usize, pixels: &[FlowPixel]) {

@@ -325,7 +325,9 @@ struct KeptMagnitudes<'a> {
 }
 
 impl Sink for KeptMagnitudes<'_> {
-    const FIELDS: bool = false;
+    fn reads_fields(&self) -> bool {
+        false
+    }
 
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
@@ -359,7 +361,9 @@ struct StripRgb<'a, 'b> {
 }
 
 impl Sink for StripRgb<'_, '_> {
-    const FIELDS: bool = false;
+    fn reads_fields(&self) -> bool {
+        false
+    }
 
     fn row(&mut self, y: usize, _x: usize, pixels: &[FlowPixel]) {
         if let Some(row) = self.rows.get_mut(y) {

@@ -69,7 +69,9 @@ impl<'h> RgbRows<'h> {
 
 impl Sink for RgbRows<'_> {
     // Bytes only: the engine skips the fields' conversions.
-    const FIELDS: bool = false;
+    fn reads_fields(&self) -> bool {
+        false
+    }
 
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let n = pixels.len().min(COLS);
