@@ -67,7 +67,9 @@ pub fn parse_header(line: &[u8]) -> Result<Header, String> {
     let (mut width, mut height, mut frame_rate) = (None, None, None);
     let mut chroma = "420jpeg".to_owned();
     for token in tokens {
-        let (tag, value) = token.split_at(1);
+        // The tag is the first character, which need not be one byte.
+        let tag_len = token.chars().next().map_or(0, char::len_utf8);
+        let (tag, value) = token.split_at(tag_len);
         match tag {
             "W" => width = value.parse::<usize>().ok().filter(|&v| v > 0),
             "H" => height = value.parse::<usize>().ok().filter(|&v| v > 0),
@@ -277,6 +279,16 @@ impl FrameSource for Y4mSource {
 
 #[cfg(test)]
 mod tests {
+    /// Found by the `y4m` fuzz target: a tag that is a multi-byte
+    /// character split inside it and panicked.
+    #[test]
+    fn a_non_ascii_tag_is_ignored_not_a_panic() {
+        let header = parse_header("YUV4MPEG2 W3 H2 Cmono \u{152}noo".as_bytes()).unwrap();
+        assert_eq!((header.width, header.height), (3, 2));
+        let crash: &[u8] = b"YUV4MPEG2 H\0\0\x003 F30000:1 Ip A1:1 Cmono XF3 300YUV4MPEG2 W3 \xc5\x92noo XYSCSS=420J;PEG";
+        assert!(parse_header(crash).is_err());
+    }
+
     use super::*;
 
     fn source(bytes: Vec<u8>) -> Result<Y4mSource, HostError> {
