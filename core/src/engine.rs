@@ -317,12 +317,13 @@ impl<const COLS: usize> Engine<COLS> {
             };
             let solved = solve(config, sums);
             let v = [vx[i], vy[i]];
-            let (v_c, v_d) = match fields {
-                true => (
+            let (v_c, v_d) = if fields {
+                (
                     v.map(|v| curl_free_q16(config, v)),
                     divergence_free_q16(config, &solved),
-                ),
-                false => ([0; 2], [0; 2]),
+                )
+            } else {
+                ([0; 2], [0; 2])
             };
             *out = FlowPixel {
                 v_c: v_c.map(I16F16::from_bits),
