@@ -378,7 +378,7 @@ impl Cell {
 ///     MotionCues::<CELL, { grid_cells(W, CELL) }, { grid_cells(H, CELL) }, 4>::new(&config, params)?;
 /// let mut engine = Engine::<30>::new(); // 16-px tiles
 /// let plan = Plan::new(config, 16, 16)?;
-/// engine.run(&plan, &FramePair::packed(&config, &prev, &next)?, &mut cues)?;
+/// engine.run(&plan.bind(FramePair::packed(&config, &prev, &next)?)?, &mut cues);
 /// let regions = cues.end_frame();
 /// assert_eq!(regions.len(), 1);
 /// let r = regions[0];

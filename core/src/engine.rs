@@ -5,14 +5,19 @@
 //! A tile of `w × h` output pixels is computed from a window of
 //! `n = w + 14` columns and `h + 14` rows of clamped input (SPEC §6). Pushing
 //! window row `t` completes `E` of row `t−2`, `V` of `t−4`, the structure
-//! products of `t−5` and the output of `t−7`, so an output row leaves as
-//! soon as the input row 7 below it has arrived. Because each stage depends
-//! only on its inputs, not on where the window starts, every tiling yields
-//! the same bytes as one whole-frame window.
+//! products of `t−5` and the output of `t−7` (the lags in `schedule.rs`),
+//! so an output row leaves as soon as the input row 7 below it has arrived.
+//! Because each stage depends only on its inputs, not on where the window
+//! starts, every tiling yields the same bytes as one whole-frame window.
 
 use fixed::types::{I16F16, U32F32};
 
 use crate::ring::RowRing;
+use crate::schedule::{
+    D_DEPTH, E_DEPTH, E_LAG, E_RADIUS, E_START, HALO, OUTPUT_LAG, OUTPUT_START, P0_DEPTH,
+    PRODUCT_LAG, PRODUCT_RADIUS, PRODUCT_START, SUM_DEPTH, SUM_RADIUS, V_DEPTH, V_LAG, V_RADIUS,
+    V_START,
+};
 use crate::solve::{
     StructureSums, curl_free_magnitude_q32, curl_free_q16, divergence_free_magnitude_q32,
     divergence_free_q16, solve,
@@ -21,10 +26,7 @@ use crate::stages::{
     CHANNELS, Products, ResidualInputs, boundary_minus_domain, smooth, structure_row,
     vertical_binomial,
 };
-use crate::{Config, Error, FramePair, Plan, Tile};
-
-/// Radius of input that one output pixel depends on (SPEC §6).
-pub const HALO: usize = 7;
+use crate::{Config, Job, Tile};
 
 /// Everything the representation knows about one pixel.
 ///
@@ -129,14 +131,14 @@ pub(crate) struct Window {
 pub struct Engine<const COLS: usize> {
     window: Window,
     products: Products<COLS>,
-    sums: [RowRing<i32, COLS, 5>; CHANNELS],
-    e: [RowRing<i32, COLS, 5>; 2],
-    v: [RowRing<i32, COLS, 4>; 2],
+    sums: [RowRing<i32, COLS, SUM_DEPTH>; CHANNELS],
+    e: [RowRing<i32, COLS, E_DEPTH>; 2],
+    v: [RowRing<i32, COLS, V_DEPTH>; 2],
     vert_e: [[i32; COLS]; 2],
     out: [FlowPixel; COLS],
-    d: RowRing<i16, COLS, 6>,
+    d: RowRing<i16, COLS, D_DEPTH>,
     vert_d: [[i16; COLS]; 4],
-    p0: RowRing<u8, COLS, 8>,
+    p0: RowRing<u8, COLS, P0_DEPTH>,
 }
 
 impl<const COLS: usize> Engine<COLS> {
@@ -174,41 +176,32 @@ impl<const COLS: usize> Engine<COLS> {
         }
     }
 
-    /// Compute every tile of `plan` into `sink`. Fails only when the frames
-    /// are not of the plan's size.
+    /// Compute every tile of the job into `sink`.
     #[inline(always)]
-    pub fn run<S: Sink>(
-        &mut self,
-        plan: &Plan<COLS>,
-        frames: &FramePair<'_>,
-        sink: &mut S,
-    ) -> Result<(), Error> {
-        check_size(plan.config(), frames)?;
-        for tile in plan.tiles() {
-            self.tile(plan.config(), frames, tile, sink);
+    pub fn run<S: Sink>(&mut self, job: &Job<'_, COLS>, sink: &mut S) {
+        for tile in job.plan().tiles() {
+            self.tile(job, tile, sink);
         }
-        Ok(())
     }
 
-    /// Compute tile `index` of `plan` (for callers that spread tiles over
-    /// cores). Fails when the frames are not of the plan's size or the index
-    /// is past the last tile.
+    /// Compute tile `index` of the job (for callers that spread tiles over
+    /// cores): the tile computed, or `None` (and nothing done) past the
+    /// last tile.
     #[inline(always)]
     pub fn run_tile<S: Sink>(
         &mut self,
-        plan: &Plan<COLS>,
-        frames: &FramePair<'_>,
+        job: &Job<'_, COLS>,
         index: usize,
         sink: &mut S,
-    ) -> Result<(), Error> {
-        check_size(plan.config(), frames)?;
-        let tile = plan.tile(index).ok_or(Error::TileOutOfFrame)?;
-        self.tile(plan.config(), frames, tile, sink);
-        Ok(())
+    ) -> Option<Tile> {
+        let tile = job.plan().tile(index)?;
+        self.tile(job, tile, sink);
+        Some(tile)
     }
 
     #[inline(always)]
-    fn tile<S: Sink>(&mut self, config: &Config, frames: &FramePair<'_>, tile: Tile, sink: &mut S) {
+    fn tile<S: Sink>(&mut self, job: &Job<'_, COLS>, tile: Tile, sink: &mut S) {
+        let (config, frames) = (job.plan().config(), job.frames());
         let y_first = tile.y as isize - HALO as isize;
         self.begin(Window {
             x_first: tile.x as isize - HALO as isize,
@@ -224,6 +217,11 @@ impl<const COLS: usize> Engine<COLS> {
 
     #[inline(always)]
     pub(crate) fn begin(&mut self, window: Window) {
+        debug_assert!(
+            window.n <= COLS,
+            "a window of {} columns in {COLS}",
+            window.n
+        );
         self.window = Window {
             n: window.n.min(COLS),
             t: 0,
@@ -251,31 +249,32 @@ impl<const COLS: usize> Engine<COLS> {
             self.p0.row_mut(t),
             self.d.row_mut(t),
         );
-        if t >= 4 {
+        if t >= E_START {
             let [ex, ey] = &mut self.e;
             boundary_minus_domain(
-                self.d.rows(t - 4),
+                self.d.rows(t - 2 * E_RADIUS),
                 &mut self.vert_d,
-                (ex.row_mut(t - 2), ey.row_mut(t - 2)),
+                (ex.row_mut(t - E_LAG), ey.row_mut(t - E_LAG)),
                 n,
             );
         }
-        if t >= 8 {
-            let e = [self.e[0].rows(t - 6), self.e[1].rows(t - 6)];
+        if t >= V_START {
+            let first = t - V_LAG - V_RADIUS;
+            let e = [self.e[0].rows(first), self.e[1].rows(first)];
             let [vx, vy] = &mut self.v;
             smooth(
                 e,
                 &mut self.vert_e,
-                (vx.row_mut(t - 4), vy.row_mut(t - 4)),
+                (vx.row_mut(t - V_LAG), vy.row_mut(t - V_LAG)),
                 n,
             );
         }
-        if t >= 10 {
-            let j = t - 5;
+        if t >= PRODUCT_START {
+            let j = t - PRODUCT_LAG;
             let input = ResidualInputs {
                 vx: self.v[0].row(j),
-                vy: self.v[1].rows(j - 1),
-                p0: self.p0.rows(j - 1),
+                vy: self.v[1].rows(j - PRODUCT_RADIUS),
+                p0: self.p0.rows(j - PRODUCT_RADIUS),
                 d: self.d.row(j),
                 kappa: config.kappa_split(),
                 shift: config.dn_shift,
@@ -283,8 +282,8 @@ impl<const COLS: usize> Engine<COLS> {
             let sums = self.sums.each_mut().map(|ring| ring.row_mut(j));
             structure_row(&input, &mut self.products, sums, n);
         }
-        if t >= 2 * HALO {
-            self.emit(config, t - HALO, sink);
+        if t >= OUTPUT_START {
+            self.emit(config, t - OUTPUT_LAG, sink);
         }
     }
 
@@ -300,7 +299,7 @@ impl<const COLS: usize> Engine<COLS> {
         } = self.window;
         // The vertical G of the seven sums, into the product rows (free now).
         for (ring, out) in self.sums.iter().zip(self.products.rows.iter_mut()) {
-            vertical_binomial(ring.rows(o - 2), out, n, HALO);
+            vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
         }
         let fields = sink.reads_fields();
         let [a, b, c, ph, pl, qh, ql] = &self.products.rows;
@@ -402,11 +401,12 @@ pub const fn working_bytes(cols: usize) -> usize {
     const fn field(offset: usize, size: usize, align: usize) -> usize {
         offset.next_multiple_of(align) + size
     }
+    let words = CHANNELS + CHANNELS * SUM_DEPTH + 2 * E_DEPTH + 2 * V_DEPTH + 2;
     let mut end = size_of::<Window>();
-    end = field(end, (7 + 7 * 5 + 2 * 5 + 2 * 4 + 2) * 4 * cols, 4);
+    end = field(end, words * 4 * cols, 4);
     end = field(end, size_of::<FlowPixel>() * cols, align_of::<FlowPixel>());
-    end = field(end, (6 + 4) * 2 * cols, 2);
-    end = field(end, 8 * cols, 1);
+    end = field(end, (D_DEPTH + 4) * 2 * cols, 2);
+    end = field(end, P0_DEPTH * cols, 1);
     end.next_multiple_of(align_of::<Window>())
 }
 
@@ -414,16 +414,6 @@ impl<const COLS: usize> Default for Engine<COLS> {
     fn default() -> Self {
         Self::new()
     }
-}
-
-fn check_size(config: &Config, frames: &FramePair<'_>) -> Result<(), Error> {
-    let size = (config.width(), config.height());
-    let prev = (frames.prev().width(), frames.prev().height());
-    let next = (frames.next().width(), frames.next().height());
-    if prev != size || next != size {
-        return Err(Error::SizeMismatch);
-    }
-    Ok(())
 }
 
 #[cfg(test)]

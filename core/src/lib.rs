@@ -1,15 +1,7 @@
 //! ReynoldsFlow (Chen, Lin, Huang, Wu) in `no_std`, no-alloc, fixed-point
 //! Rust: from two consecutive 8-bit gray frames, the curl-free field `v_c`,
 //! the divergence-free field `v_d`, their magnitudes, and the RGB8
-//! representation `[|v_d|, |v_c|, fⁿ]`, exactly as the project's SPEC
-//! defines them.
-//!
-//! The computation is integer-only and deterministic: every target gives the
-//! same bytes. All working memory lives in one [`Engine`] whose size is a
-//! const generic (`COLS` window columns, about 316 bytes each), and frames
-//! are cut into tiles of at most `COLS − 14` columns; every tiling gives the
-//! same bytes. Sizes and parameters are checked once ([`Config`], [`Plan`],
-//! [`FramePair`], the sinks); after that nothing fails or panics.
+//! representation `[|v_d|, |v_c|, fⁿ]`, as the project's SPEC defines them.
 //!
 //! ```
 //! use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
@@ -18,14 +10,39 @@
 //! let prev: Vec<u8> = (0..w * h).map(|i| (i * 7 % 251) as u8).collect();
 //! let next: Vec<u8> = (0..w * h).map(|i| ((i + 1) * 7 % 251) as u8).collect();
 //!
+//! // Validate once: sizes and parameters, the tiling, the frames.
 //! let config = Config::new(w, h, Params::DEFAULT)?;
-//! let mut engine = Engine::<78>::new(); // tiles up to 64 columns wide
-//! let plan = Plan::strips(config)?;
-//! let frames = FramePair::packed(&config, &prev, &next)?;
+//! let plan = Plan::strips(config)?; // tiles as wide as the engine allows
+//! let job = plan.bind(FramePair::packed(&config, &prev, &next)?)?;
+//!
+//! // Then compute: all working memory is the engine (here 78 columns,
+//! // tiles up to 64 wide, about 25 KiB), and running cannot fail.
+//! let mut engine = Engine::<78>::new();
 //! let mut rgb = vec![0u8; w * h * 3];
-//! represent(&mut engine, &plan, &frames, Scaling::PerFrameMinMax, &mut rgb, ())?;
+//! represent(&mut engine, &job, Scaling::PerFrameMinMax, &mut rgb, ())?;
 //! # Ok(()) }
 //! ```
+//!
+//! # How it computes
+//!
+//! The computation is integer-only and deterministic: every target gives the
+//! same bytes. All working memory lives in one [`Engine`] whose size is a
+//! const generic (`COLS` window columns, about 316 bytes each), and frames
+//! are cut into tiles of at most `COLS − 14` columns; every tiling gives the
+//! same bytes. Sizes and parameters are checked once ([`Config`], [`Plan`],
+//! [`FramePair`], [`Job`], the sinks); after that nothing fails or panics.
+//! Other output goes through a [`Sink`], which sees each output row as
+//! [`FlowPixel`]s: the ready-made ones write field planes ([`FieldSink`]),
+//! the bytes ([`RgbSink`]) or the extremes ([`ExtremesSink`]).
+//!
+//! # Stability
+//!
+//! The stable surface is what the example uses and what a firmware or
+//! binding needs beside it: [`Engine`], [`Plan`], [`Job`], [`FramePair`],
+//! [`Config`] and [`Params`], [`Sink`] and [`FlowPixel`], [`Error`] (the one
+//! error type), and the scaling ([`Scaling`], [`ByteScale`], [`represent`]).
+//! Changes to them follow semantic versioning; the bytes they produce change
+//! only with a SPEC change, recorded in the repository's golden files.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -39,12 +56,14 @@ mod engine;
 mod error;
 mod frames;
 mod isqrt;
+mod job;
 mod params;
 mod plan;
 mod reciprocal;
 mod represent;
 mod ring;
 mod scale;
+mod schedule;
 mod sink;
 mod solve;
 mod stages;
@@ -52,14 +71,16 @@ mod stream;
 
 pub use cues::{CueError, CueParams, Field, FrameLevel, MotionCues, Region, Threshold, grid_cells};
 pub use display::{HUE_STEPS, Rgb565Sink, View, direction_hue, hsv, rgb565};
-pub use engine::{Engine, FlowPixel, HALO, Sink, working_bytes};
+pub use engine::{Engine, FlowPixel, Sink, working_bytes};
 pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};
 pub use heapless;
+pub use job::Job;
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
 pub use plan::{Plan, Tile, first_stage_pixels};
 pub use represent::{byte_scales, represent};
 pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
+pub use schedule::HALO;
 pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb};
 pub use stream::RowStream;

@@ -5,7 +5,7 @@ use fixed::types::{I16F16, U32F32};
 use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Sink};
 
 /// Check that an output plane holds a whole frame.
-fn check_len(config: &Config, len: usize, per_pixel: usize) -> Result<(), Error> {
+pub(crate) fn check_len(config: &Config, len: usize, per_pixel: usize) -> Result<(), Error> {
     let needed = config.width() * config.height() * per_pixel;
     if len < needed {
         return Err(Error::BufferTooShort { needed, got: len });

@@ -136,7 +136,12 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
     let lambda = config.lambda4;
     let (a4, c4, b4) = (4 * s.a + lambda, 4 * s.c + lambda, 4 * s.b);
     let (a4, c4, b4) = (i64::from(a4), i64::from(c4), i64::from(b4));
+    debug_assert!(s.a >= 0 && s.c >= 0 && b4 * b4 <= (a4 - lambda as i64) * (c4 - lambda as i64));
     let det = (a4 * c4 - b4 * b4) as u64;
+    debug_assert!(
+        det >= (lambda as u64).pow(2) && det < 1 << 62,
+        "det = {det}"
+    );
     let join = |[hi, lo]: [i32; 2]| (i64::from(hi) << 14) + i64::from(lo);
     let (p, q) = (join(s.p), join(s.q));
     let tau = (bit_length(p.unsigned_abs() | q.unsigned_abs()) - 31).max(0) as u32;

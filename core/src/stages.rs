@@ -186,6 +186,7 @@ pub fn boundary_minus_domain<const COLS: usize>(
         let kb_y = v3[1] + 4 * v3[2] + v3[3];
         let bs_y = (v4[0] + v4[4]) + 3 * (v4[1] + v4[3]) + 4 * v4[2];
         *ey = kb_y - 3 * bs_y;
+        debug_assert!(ex.abs().max(ey.abs()) <= E_MAX, "E = ({ex}, {ey})");
     }
 }
 
@@ -204,7 +205,16 @@ pub fn smooth<const COLS: usize>(
     vertical_binomial(ey, ty, n, 2);
     horizontal_binomial(tx, v.0, n, 4);
     horizontal_binomial(ty, v.1, n, 4);
+    debug_assert!(
+        v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
+        "V beyond its bound"
+    );
 }
+
+/// `|E| ≤ 132 · 255` (module table).
+const E_MAX: i32 = 132 * 255;
+/// `|V| ≤ 26 880 · 255` (module table).
+const V_MAX: i32 = 26_880 * 255;
 
 /// The rows one residual row reads: `V` above, at and below it, `p0` likewise,
 /// and `d` at it.
@@ -302,6 +312,7 @@ pub fn structure_row<const COLS: usize>(
         let q = (vx_r - vx_l) + (vy_d - vy_u);
         let x = (pu[2] - pu[0]) + 2 * (pm[2] - pm[0]) + (pd[2] - pd[0]);
         let y = (pd[0] + 2 * pd[1] + pd[2]) - (pu[0] + 2 * pu[1] + pu[2]);
+        debug_assert!(x.abs() <= 1020 && y.abs() <= 1020 && q.abs() <= 16_144_560);
         let dn = rounded_residual(kappa, shift, i32::from(dd), [x, y], [vx_c, vy_c], pm[1], q);
         // Dn′ = h·2¹⁴ + l, l ∈ [−2¹³, 2¹³), |h| ≤ 2¹³.
         let l = (dn << 18) >> 18;

@@ -105,14 +105,16 @@ fuzz_target!(|case: Case| {
     // The reference: whole-frame strips.
     let strips = Plan::<COLS>::strips(config).expect("strips fit the engine");
     let mut whole = vec![0u8; 3 * w * h];
-    represent(&mut *engine, &strips, &frames, scaling, &mut whole, ()).expect("checked inputs");
+    let job = strips.bind(frames).expect("frames of the plan's size");
+    represent(&mut *engine, &job, scaling, &mut whole, ()).expect("checked inputs");
 
     // Any accepted tiling gives the same bytes.
     let (tw, th) = (usize::from(case.tile.0), usize::from(case.tile.1));
     match Plan::<COLS>::new(config, tw, th) {
         Ok(plan) => {
             let mut tiled = vec![0u8; 3 * w * h];
-            represent(&mut *engine, &plan, &frames, scaling, &mut tiled, ()).expect("checked");
+            let job = plan.bind(frames).expect("frames of the plan's size");
+            represent(&mut *engine, &job, scaling, &mut tiled, ()).expect("checked");
             assert!(
                 tiled == whole,
                 "tiles {tw}x{th} of {w}x{h} differ from strips"

@@ -387,8 +387,10 @@ fn core_regions(
     );
     let mut engine = Box::new(Engine::<142>::new());
     let plan = Plan::strips(config).unwrap();
-    let pair = FramePair::packed(&config, prev, next).unwrap();
-    engine.run(&plan, &pair, &mut *sink).unwrap();
+    let job = plan
+        .bind(FramePair::packed(&config, prev, next).unwrap())
+        .unwrap();
+    engine.run(&job, &mut *sink);
     sink.end_frame().to_vec()
 }
 

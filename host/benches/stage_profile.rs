@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{
-    Config, Engine, FlowPixel, FramePair, Params, Plan, Scaling, Sink, represent,
+    Config, Engine, FlowPixel, FramePair, Job, Params, Plan, Scaling, Sink, represent,
 };
 
 mod common;
@@ -35,13 +35,8 @@ const FIXED: Scaling = Scaling::Fixed {
 /// The whole engine over the frame: `represent`, `Fixed` gains (one pass),
 /// strips of the host engine.
 #[inline(never)]
-fn engine_pass(
-    engine: &mut Engine<COLS>,
-    plan: &Plan<COLS>,
-    frames: &FramePair<'_>,
-    rgb: &mut [u8],
-) {
-    represent(engine, plan, frames, FIXED, rgb, ()).unwrap();
+fn engine_pass(engine: &mut Engine<COLS>, job: &Job<'_, COLS>, rgb: &mut [u8]) {
+    represent(engine, job, FIXED, rgb, ()).unwrap();
 }
 
 /// FNV-1a over every field of every pixel, in the order the sink sees them.
@@ -76,12 +71,14 @@ fn digests() {
         let (prev, next) = moving_pair(w, h);
         let config = Config::new(w, h, Params::DEFAULT).unwrap();
         let plan = Plan::<COLS>::strips(config).unwrap();
-        let frames = FramePair::packed(&config, &prev, &next).unwrap();
+        let job = plan
+            .bind(FramePair::packed(&config, &prev, &next).unwrap())
+            .unwrap();
         let mut engine = Box::new(Engine::<COLS>::new());
         let mut pixels = Digest(0xcbf2_9ce4_8422_2325);
         let mut rgb = vec![0u8; 3 * w * h];
         let scaling = Scaling::PerFrameMinMax;
-        represent(&mut engine, &plan, &frames, scaling, &mut rgb, &mut pixels).unwrap();
+        represent(&mut engine, &job, scaling, &mut rgb, &mut pixels).unwrap();
         let mut bytes = Digest(0xcbf2_9ce4_8422_2325);
         bytes.eat(&rgb);
         println!(
@@ -115,12 +112,14 @@ fn main() {
     let (prev, next) = moving_pair(w, h);
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
     let plan = Plan::<COLS>::strips(config).unwrap();
-    let frames = FramePair::packed(&config, &prev, &next).unwrap();
+    let job = plan
+        .bind(FramePair::packed(&config, &prev, &next).unwrap())
+        .unwrap();
     let mut engine = Box::new(Engine::<COLS>::new());
     let mut rgb = vec![0u8; 3 * w * h];
     if !timing {
         for _ in 0..reps {
-            engine_pass(&mut engine, &plan, &frames, &mut rgb);
+            engine_pass(&mut engine, &job, &mut rgb);
         }
         black_box(&rgb);
         println!("stage_profile {w}x{h}: {reps} engine pass(es)");
@@ -130,7 +129,7 @@ fn main() {
     let times: Vec<f64> = (0..15)
         .map(|_| {
             let t = Instant::now();
-            engine_pass(&mut engine, &plan, &frames, &mut rgb);
+            engine_pass(&mut engine, &job, &mut rgb);
             t.elapsed().as_secs_f64() * 1e9 / px
         })
         .collect();

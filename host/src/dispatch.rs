@@ -38,11 +38,18 @@ impl Pass<'_> {
         frames: &FramePair<'_>,
         sink: &mut S,
     ) -> Result<(), Error> {
+        let job = plan.bind(*frames)?;
         match self {
-            Pass::All => engine.run(plan, frames, sink),
-            Pass::Tile(index) => engine.run_tile(plan, frames, index, sink),
+            Pass::All => {
+                engine.run(&job, sink);
+                Ok(())
+            }
+            Pass::Tile(index) => {
+                let tile = engine.run_tile(&job, index, sink);
+                tile.map(|_| ()).ok_or(Error::TileOutOfFrame)
+            }
             Pass::Represent(scaling, rgb) => {
-                reynoldsflow_core::represent(engine, plan, frames, scaling, rgb, sink)
+                reynoldsflow_core::represent(engine, &job, scaling, rgb, sink)
             }
         }
     }

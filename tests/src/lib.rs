@@ -44,8 +44,9 @@ impl Sink for PixelPlane {
 pub fn run_tiled(config: &Config, prev: &[u8], next: &[u8], tile: (usize, usize)) -> PixelPlane {
     let plan = Plan::<COLS>::new(*config, tile.0, tile.1).expect("tile fits the test engine");
     let frames = FramePair::packed(config, prev, next).expect("frames of the config's size");
+    let job = plan.bind(frames).expect("frames of the plan's size");
     let mut out = PixelPlane::new(config);
-    engine().run(&plan, &frames, &mut out).expect("sizes match");
+    engine().run(&job, &mut out);
     out
 }
 

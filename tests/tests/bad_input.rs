@@ -71,11 +71,11 @@ proptest! {
         let (prev, next) = frame_pair(Pattern::ALL[pattern], w, h, seed);
         let mut engine = Box::new(Engine::<64>::new());
         let plan = Plan::strips(config).unwrap();
-        let frames = FramePair::packed(&config, &prev, &next).unwrap();
+        let job = plan.bind(FramePair::packed(&config, &prev, &next).unwrap()).unwrap();
         let mut rgb = vec![0; w * h * 3];
         // A sink that reads the fields too, so their conversions run.
         let mut fields = PixelPlane::new(&config);
-        represent(&mut *engine, &plan, &frames, Scaling::PerFrameMinMax, &mut rgb, &mut fields).unwrap();
+        represent(&mut *engine, &job, Scaling::PerFrameMinMax, &mut rgb, &mut fields).unwrap();
     }
 }
 
@@ -96,14 +96,15 @@ fn parameter_extremes_run_on_saturated_frames() {
             for seed in 0..4 {
                 let (prev, next) = frame_pair(pattern, 40, 30, seed);
                 let mut engine = Box::new(Engine::<64>::new());
-                let frames = FramePair::packed(&config, &prev, &next).unwrap();
                 let mut rgb = vec![0; 40 * 30 * 3];
                 let plan = Plan::strips(config).unwrap();
+                let job = plan
+                    .bind(FramePair::packed(&config, &prev, &next).unwrap())
+                    .unwrap();
                 let mut fields = PixelPlane::new(&config);
                 represent(
                     &mut *engine,
-                    &plan,
-                    &frames,
+                    &job,
                     Scaling::PerFrameMinMax,
                     &mut rgb,
                     &mut fields,
@@ -155,14 +156,21 @@ fn mismatched_and_short_buffers_are_typed_errors() {
     let other = Config::new(9, 6, Params::DEFAULT).unwrap();
     let frames = FramePair::packed(&config, &a, &a).unwrap();
     let mut engine = Box::new(Engine::<64>::new());
-    let plan = Plan::strips(other).unwrap();
+    let plan = Plan::<64>::strips(other).unwrap();
+    assert_eq!(plan.bind(frames).unwrap_err(), Error::SizeMismatch);
+    // Past the last tile: nothing computed, and said so.
+    let plan = Plan::strips(config).unwrap();
+    let job = plan.bind(frames).unwrap();
+    assert_eq!(engine.run_tile(&job, 99, &mut ()), None);
+    assert_eq!(engine.run_tile(&job, 0, &mut ()), plan.tile(0));
+    // An RGB plane too short is refused before anything runs.
+    let mut short = vec![0u8; 8 * 6 * 3 - 1];
     assert_eq!(
-        engine.run(&plan, &frames, &mut ()),
-        Err(Error::SizeMismatch)
-    );
-    assert_eq!(
-        engine.run_tile(&Plan::strips(config).unwrap(), &frames, 99, &mut ()),
-        Err(Error::TileOutOfFrame)
+        represent(&mut *engine, &job, Scaling::PerFrameMinMax, &mut short, ()),
+        Err(Error::BufferTooShort {
+            needed: 144,
+            got: 143
+        })
     );
 
     // Streams: strips outside the frame, short rows, rows past the end.

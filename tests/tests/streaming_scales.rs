@@ -46,12 +46,11 @@ fn previous_frame_min_max_uses_the_last_frames_extremes() {
         let mut expected = vec![0u8; 3 * w * h];
         let rgb = RgbSink::new(&config, &mut expected, scale_d, scale_c).unwrap();
         let mut extremes = ExtremesSink::default();
-        engine
-            .run(&plan, &frames, &mut (rgb, &mut extremes))
-            .unwrap();
+        let job = plan.bind(frames).unwrap();
+        engine.run(&job, &mut (rgb, &mut extremes));
         assert_eq!(streamed, expected, "frame {k}");
         // Only this frame's extremes carry over to the next frame.
-        let exact = byte_scales(&mut engine, &plan, &frames, Scaling::PerFrameMinMax).unwrap();
+        let exact = byte_scales(&mut engine, &job, Scaling::PerFrameMinMax);
         assert_eq!(scales.scales(), exact, "frame {k}");
         previous_extremes = Some(extremes);
     }

@@ -97,9 +97,11 @@ impl Analysis {
     /// Run a pair once only to learn its levels (byte scales and the cue
     /// reference), so the first shown frame is not drawn blind.
     pub fn prime(&mut self, prev: &[u8], next: &[u8]) -> Result<(), DemoError> {
-        let frames = FramePair::packed(&self.config, prev, next)?;
+        let job = self
+            .plan
+            .bind(FramePair::packed(&self.config, prev, next)?)?;
         let mut sinks = (self.scales.tracker(), &mut *self.cues);
-        self.engine.run(&self.plan, &frames, &mut sinks)?;
+        self.engine.run(&job, &mut sinks);
         self.scales.end_frame();
         self.cues.end_frame();
         Ok(())
@@ -107,7 +109,9 @@ impl Analysis {
 
     /// Analyse the pair `(fⁿ, fⁿ⁺¹)` in one pass; returns the cues.
     pub fn step(&mut self, prev: &[u8], next: &[u8]) -> Result<&[Region], DemoError> {
-        let frames = FramePair::packed(&self.config, prev, next)?;
+        let job = self
+            .plan
+            .bind(FramePair::packed(&self.config, prev, next)?)?;
         let (scale_d, scale_c) = self.scales.scales();
         // Direction view: full brightness at the cue level and above, so
         // what the cues see stands out and the background still shows.
@@ -135,7 +139,7 @@ impl Analysis {
             luma,
             (repr, (dir, (&mut *self.cues, self.scales.tracker()))),
         );
-        self.engine.run(&self.plan, &frames, &mut sinks)?;
+        self.engine.run(&job, &mut sinks);
         self.scales.end_frame();
         Ok(self.cues.end_frame())
     }

@@ -98,7 +98,7 @@ fn tiled<const COLS: usize>(
     let mut engine = Box::new(Engine::<COLS>::new());
     let plan = Plan::<COLS>::new(config(), tile.0, tile.1).unwrap();
     cue_sequence(frames, params, |pair, cues| {
-        engine.run(&plan, pair, cues).unwrap()
+        engine.run(&plan.bind(*pair).unwrap(), cues)
     })
 }
 
@@ -228,12 +228,12 @@ fn a_full_list_keeps_the_strongest() {
     let config = config();
     let mut engine = Box::new(Engine::<78>::new());
     let plan = Plan::new(config, 20, 30).unwrap();
-    let pair = FramePair::packed(&config, &frames[0], &frames[1]).unwrap();
+    let job = plan
+        .bind(FramePair::packed(&config, &frames[0], &frames[1]).unwrap())
+        .unwrap();
     let mut small = Box::new(MotionCues::<8, 20, 15, 3>::new(&config, params).unwrap());
     let mut large = Box::new(MotionCues::<8, 20, 15, 16>::new(&config, params).unwrap());
-    engine
-        .run(&plan, &pair, &mut (&mut *small, &mut *large))
-        .unwrap();
+    engine.run(&job, &mut (&mut *small, &mut *large));
     let (small_list, large_list) = (small.end_frame().to_vec(), large.end_frame().to_vec());
     assert_eq!(large_list.len(), 8, "{large_list:?}");
     assert_eq!(small.last_frame().regions_found, 8);
@@ -260,14 +260,15 @@ fn cues_compose_with_the_rgb_sink() {
     let config = config();
     let mut engine = Box::new(Engine::<78>::new());
     let plan = Plan::strips(config).unwrap();
-    let pair = FramePair::packed(&config, &prev, &next).unwrap();
+    let job = plan
+        .bind(FramePair::packed(&config, &prev, &next).unwrap())
+        .unwrap();
     let scaling = reynoldsflow_core::Scaling::PerFrameMinMax;
     let mut alone = vec![0u8; WIDTH * HEIGHT * 3];
-    reynoldsflow_core::represent(&mut engine, &plan, &pair, scaling, &mut alone, ()).unwrap();
+    reynoldsflow_core::represent(&mut engine, &job, scaling, &mut alone, ()).unwrap();
     let mut with = vec![0u8; WIDTH * HEIGHT * 3];
     let mut cues = Box::new(Cues::new(&config, cue_params()).unwrap());
-    reynoldsflow_core::represent(&mut engine, &plan, &pair, scaling, &mut with, &mut *cues)
-        .unwrap();
+    reynoldsflow_core::represent(&mut engine, &job, scaling, &mut with, &mut *cues).unwrap();
     assert_eq!(alone, with);
     assert_eq!(cues.last_frame().pixels, 0);
     cues.end_frame();

@@ -32,7 +32,7 @@ fn measure(frames: &[Vec<u8>], params: CueParams) -> Figures {
     let mut found = 0u32;
     for (n, pair) in frames.windows(2).enumerate() {
         let pair = FramePair::packed(&config, &pair[0], &pair[1]).unwrap();
-        engine.run(&plan, &pair, &mut *cues).unwrap();
+        engine.run(&plan.bind(pair).unwrap(), &mut *cues);
         cues.end_frame();
         if n < SETTLE {
             continue;

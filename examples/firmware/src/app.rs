@@ -50,6 +50,13 @@ fn run() -> i32 {
             return SETUP_FAILED;
         }
     };
+    let job = match plan.bind(frames) {
+        Ok(job) => job,
+        Err(e) => {
+            defmt::error!("core refused the frames: {}", e);
+            return SETUP_FAILED;
+        }
+    };
     let Ok(file) = semihosting::fs::File::create(OUT_FILE) else {
         defmt::error!("cannot create the output file");
         return IO_FAILED;
@@ -70,12 +77,12 @@ fn run() -> i32 {
     #[cfg(feature = "panic-canary")]
     if core::hint::black_box(false) {
         // Never runs: links the canary entry in for the panic check.
-        let _ = crate::entry::rf_canary_entry(engine, &plan, &frames, &mut sink, 0);
+        crate::entry::rf_canary_entry(engine, &job, &mut sink, 0);
     }
 
     let painted = stack::paint();
     bench_start();
-    let result = rf_engine_entry(engine, &plan, &frames, &mut sink);
+    rf_engine_entry(engine, &job, &mut sink);
     bench_stop();
     let (stack_bytes, saturated) = stack::high_water(&painted);
 
@@ -87,10 +94,6 @@ fn run() -> i32 {
         saturated,
         plan.tile_count()
     );
-    if let Err(e) = result {
-        defmt::error!("engine refused the frames: {}", e);
-        return SETUP_FAILED;
-    }
     if let Some((y, x, got, want)) = harness.first_mismatch {
         defmt::error!(
             "{=usize} pixels differ from the host; first at (x={=usize}, y={=usize}): {=[u8]} != {=[u8]}",

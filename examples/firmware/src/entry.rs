@@ -6,7 +6,7 @@
 //! not part of the computation), must be free of panic paths.
 
 use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{ByteScale, Engine, Error, FlowPixel, FramePair, Plan, Sink, rgb};
+use reynoldsflow_core::{ByteScale, Engine, FlowPixel, Job, Sink, rgb};
 use semihosting::fs::File;
 use semihosting::io::{Seek, SeekFrom, Write};
 
@@ -111,17 +111,12 @@ pub fn rf_emit_row(harness: &mut Harness, y: usize, x: usize, row: &[[u8; 3]]) {
     bench_start();
 }
 
-/// The engine's processing entry point: every tile of `plan` through the
+/// The engine's processing entry point: every tile of the job through the
 /// engine into the RGB sink.
 #[unsafe(no_mangle)]
 #[inline(never)]
-pub fn rf_engine_entry(
-    engine: &mut Engine<COLS>,
-    plan: &Plan<COLS>,
-    frames: &FramePair<'_>,
-    sink: &mut RgbRows<'_>,
-) -> Result<(), Error> {
-    engine.run(plan, frames, sink)
+pub fn rf_engine_entry(engine: &mut Engine<COLS>, job: &Job<'_, COLS>, sink: &mut RgbRows<'_>) {
+    engine.run(job, sink)
 }
 
 /// The same entry plus a panic path the optimiser cannot remove (an index
@@ -132,14 +127,12 @@ pub fn rf_engine_entry(
 #[inline(never)]
 pub fn rf_canary_entry(
     engine: &mut Engine<COLS>,
-    plan: &Plan<COLS>,
-    frames: &FramePair<'_>,
+    job: &Job<'_, COLS>,
     sink: &mut RgbRows<'_>,
     index: usize,
-) -> Result<(), Error> {
-    let result = engine.run(plan, frames, sink);
+) {
+    engine.run(job, sink);
     rf_canary_index(sink.harness.expected, index);
-    result
 }
 
 #[cfg(feature = "panic-canary")]
