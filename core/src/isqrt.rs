@@ -1,7 +1,9 @@
-//! An exact integer square root that needs no divide: a table seed, two
-//! Newton steps on the reciprocal root (multiplies and shifts only), then a
-//! correction to the exact floor. About 20 operations on every target,
-//! where a bit-by-bit root takes over a hundred.
+//! An exact integer square root. Where the FPU has a correctly rounded
+//! `f64` root (x86-64, aarch64) it is that root's floor; elsewhere a table
+//! seed, two Newton steps on the reciprocal root (multiplies and shifts
+//! only) and a correction to the exact floor, about 20 operations where a
+//! bit-by-bit root takes over a hundred. Both are the exact floor, so every
+//! target gives the same bytes (the tests hold each to `u64::isqrt`).
 
 /// `r0[k] ≈ 2³⁰ / √((k + ½) / 256)` for the top byte `k ∈ [64, 256)` of a
 /// normalised argument: a seed good to 8 bits (Q30, in `(2³⁰, 2³¹]`).
@@ -27,10 +29,33 @@ pub fn mul(a: u32, b: u32) -> u64 {
 pub const ISQRT_MAX: u64 = (1 << 50) - 1;
 
 /// `⌊√n⌋`, exact for every `n ≤` [`ISQRT_MAX`] (larger `n` are cut to it).
-/// The correction is one step each way, without loops: no data-dependent
-/// branch but the one for zero.
 #[inline]
 pub fn isqrt(n: u64) -> u32 {
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    let r = isqrt_by_fpu(n);
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    let r = isqrt_by_newton(n);
+    r
+}
+
+/// [`isqrt`] from the correctly rounded `f64` root. Exact: `n < 2⁵²` converts
+/// exactly, and with `k = ⌊√n⌋ < 2²⁶`, `√n ≤ √((k+1)² − 1) < k + 1 − 1/(2(k+1))`,
+/// more than half an ulp (`≤ 2⁻²⁸` below 2²⁶) under `k + 1`, so rounding
+/// cannot carry the root up to the next integer; the floor is `k`.
+#[inline]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+fn isqrt_by_fpu(n: u64) -> u32 {
+    libm::sqrt(n.min(ISQRT_MAX) as f64) as u32
+}
+
+/// [`isqrt`] without a divide or an FPU. The correction is one step each
+/// way, without loops: no data-dependent branch but the one for zero.
+#[inline]
+#[cfg_attr(
+    any(target_arch = "x86_64", target_arch = "aarch64"),
+    allow(dead_code, reason = "tested on every host")
+)]
+pub fn isqrt_by_newton(n: u64) -> u32 {
     // Zero is the common case (still parts of a frame): skip the root.
     if n < 4 {
         return u32::from(n != 0);
@@ -86,6 +111,7 @@ mod tests {
         .chain([ISQRT_MAX + 1, 1 << 62, u64::MAX])
         {
             assert_eq!(isqrt(n), want(n), "{n}");
+            assert_eq!(isqrt_by_newton(n), want(n), "{n}");
         }
     }
 
@@ -97,9 +123,11 @@ mod tests {
         let wrong = (1..=last)
             .filter(|&r| {
                 let s = r * r;
-                isqrt(s) != r as u32
-                    || isqrt(s - 1) != (r - 1) as u32
-                    || (s + r <= ISQRT_MAX && isqrt(s + r) != r as u32)
+                [isqrt, isqrt_by_newton].iter().any(|root| {
+                    root(s) != r as u32
+                        || root(s - 1) != (r - 1) as u32
+                        || (s + r <= ISQRT_MAX && root(s + r) != r as u32)
+                })
             })
             .count();
         assert_eq!(wrong, 0);
@@ -114,6 +142,7 @@ mod tests {
             s ^= s << 17;
             let n = s >> (i % 64);
             assert_eq!(isqrt(n), want(n), "{n}");
+            assert_eq!(isqrt_by_newton(n), want(n), "{n}");
         }
     }
 }
