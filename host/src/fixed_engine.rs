@@ -230,7 +230,7 @@ pub fn compute_fixed_on(
     tile: Option<(usize, usize)>,
     scaling: Scaling,
 ) -> Result<FixedOutput, HostError> {
-    FrameEngine::new().compute_on(isa, prev, next, params, tile, scaling)
+    FrameEngine::on(isa).compute(prev, next, params, tile, scaling)
 }
 
 /// The host's whole-frame engine, reused pair after pair (one per worker):
@@ -239,6 +239,8 @@ pub fn compute_fixed_on(
 /// grown to the frame size.
 pub struct FrameEngine {
     engine: Box<HostEngine>,
+    /// Which compilation of the engine pass runs.
+    isa: Isa,
     /// `[|v_d|, |v_c|]` of every pixel of the last pair (per-frame min–max
     /// of [`Self::represent`] only): all that the byte step needs besides
     /// `fⁿ`, which waits in the RGB frame's B channel.
@@ -252,10 +254,17 @@ impl Default for FrameEngine {
 }
 
 impl FrameEngine {
-    /// An engine with empty buffers.
+    /// An engine with empty buffers, the widest instructions the CPU has.
     pub fn new() -> Self {
+        Self::on(Isa::Best)
+    }
+
+    /// An engine whose pass is compiled for `isa` (every `isa` gives the
+    /// same bytes).
+    pub fn on(isa: Isa) -> Self {
         Self {
             engine: boxed_engine(),
+            isa,
             magnitudes: Vec::new(),
         }
     }
@@ -270,24 +279,18 @@ impl FrameEngine {
         tile: Option<(usize, usize)>,
         scaling: Scaling,
     ) -> Result<FixedOutput, HostError> {
-        self.compute_on(Isa::Best, prev, next, params, tile, scaling)
-    }
-
-    /// [`Self::compute`] with the engine pass compiled for `isa`.
-    pub fn compute_on(
-        &mut self,
-        isa: Isa,
-        prev: &Gray,
-        next: &Gray,
-        params: Params,
-        tile: Option<(usize, usize)>,
-        scaling: Scaling,
-    ) -> Result<FixedOutput, HostError> {
         let (plan, frames) = prepare(prev, next, params, tile)?;
         let (width, height) = prev.size();
         let mut pixels = vec![FlowPixel::default(); width * height];
         let mut sink = PixelRows::whole(&mut pixels, width);
-        dispatch::run(isa, &mut self.engine, &plan, &frames, Pass::All, &mut sink)?;
+        dispatch::run(
+            self.isa,
+            &mut self.engine,
+            &plan,
+            &frames,
+            Pass::All,
+            &mut sink,
+        )?;
         let extremes = sink.extremes;
         let rep = rgb_of(&pixels, width, extremes, scaling, 1);
         Ok(output(width, height, &pixels, rep))
@@ -317,7 +320,7 @@ impl FrameEngine {
             // Known gains: the core's `represent` streams rows into the bytes in one pass.
             let pass = Pass::Represent(scaling, rgb);
             return Ok(dispatch::run(
-                Isa::Best,
+                self.isa,
                 engine,
                 &plan,
                 &frames,
@@ -334,7 +337,7 @@ impl FrameEngine {
                 rgb,
             },
         );
-        dispatch::run(Isa::Best, engine, &plan, &frames, Pass::All, &mut sink)?;
+        dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
         let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.0))?;
         for (dst, &[m_d, m_c]) in rgb.chunks_exact_mut(3).zip(&self.magnitudes) {
             let px = FlowPixel {
