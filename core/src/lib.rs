@@ -50,8 +50,6 @@
 #[cfg(test)]
 extern crate std;
 
-mod cues;
-mod display;
 mod engine;
 mod error;
 mod frames;
@@ -69,13 +67,10 @@ mod solve;
 mod stages;
 mod stream;
 
-pub use cues::{CueError, CueParams, Field, FrameLevel, MotionCues, Region, Threshold, grid_cells};
-pub use display::{HUE_STEPS, Rgb565Sink, View, direction_hue, hsv, rgb565};
 pub use engine::{Engine, FlowPixel, Sink, working_bytes};
 pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};
-pub use heapless;
 pub use job::Job;
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
 pub use plan::{Plan, Tile, first_stage_pixels};

@@ -3,8 +3,9 @@
 //! downstream (a region-of-interest meta each) and to the application (one
 //! element message per frame).
 
+use reynoldsflow_core::Config;
 use reynoldsflow_core::fixed::types::U32F32;
-use reynoldsflow_core::{Config, CueError, CueParams, Field, MotionCues, Region, Threshold};
+use reynoldsflow_cues::{CueError, CueParams, Field, MotionCues, Region, Threshold};
 
 /// Cell side, px: 16-px cells keep a small mover in one or two cells at
 /// 640 × 480 and keep the grid's labelling cheap.

@@ -10,8 +10,9 @@ use gst_check::Harness;
 use gst_video::prelude::*;
 use gst_video::{VideoFormat, VideoInfo, VideoRegionOfInterestMeta};
 use gstreynoldsflow::cues::{self, CELL, REGION_STRUCTURE, REGIONS, ROI_TYPE};
-use reynoldsflow_core::{Config, Engine, FramePair, MotionCues, Params, Plan, Region, grid_cells};
-use reynoldsflow_host::image_io;
+use reynoldsflow_core::{Config, FramePair, Params, Plan};
+use reynoldsflow_cues::{MotionCues, Region, grid_cells};
+use reynoldsflow_host::{fixed_engine, image_io};
 
 /// GStreamer with a registry of its own (never the user's) and the plugin.
 fn init() {
@@ -385,7 +386,7 @@ fn core_regions(
         )
         .unwrap(),
     );
-    let mut engine = Box::new(Engine::<142>::new());
+    let mut engine = fixed_engine::boxed_engine();
     let plan = Plan::strips(config).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, prev, next).unwrap())

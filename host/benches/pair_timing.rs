@@ -9,15 +9,16 @@
 //!             [--seconds S] [--min-iters N] [--warmup N]
 //! ```
 //! Modes:
-//! - `serial`: the core's `represent`, `Engine<142>` in 128-px strips,
+//! - `serial`: the core's `represent`, `HostEngine` in 128-px strips,
 //!   `Fixed` gains (one engine pass, as when streaming), one thread;
 //! - `serial-portable`: `serial` compiled for the baseline (SSE2 on x86-64)
 //!   whatever the CPU, where `serial` takes the widest instructions the CPU
 //!   has (`reynoldsflow_host::dispatch`);
 //! - `serial-minmax`: `serial` with per-frame min–max (two engine passes);
-//! - `parallel`: the host's `represent_parallel`, `Fixed` gains, over a
-//!   rayon pool of `--threads` built once: the 128-px strips spread over
-//!   the threads, one engine each, bytes straight into the frame.
+//! - `parallel`: the host's one-pair parallel path (`PairPool`, what the
+//!   GStreamer element runs), `Fixed` gains, on `--threads` threads: tiles
+//!   balanced over the threads, every pixel kept, then the bytes. (`run` parallelises across pairs instead; its
+//!   scaling is timed on the command itself, `scripts/bench-vs-opencv`.)
 //!
 //! Without `--prev` (e.g. under `cargo bench`), it times the built-in
 //! textured pair at 640×480 in every mode.
@@ -25,10 +26,11 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use reynoldsflow_core::{Params, Scaling};
-use reynoldsflow_host::Gray;
+use reynoldsflow_core::{Frame, IntensityScale, Scaling};
+use reynoldsflow_host::cli::values::ScaleArg;
 use reynoldsflow_host::dispatch::Isa;
-use reynoldsflow_host::fixed_engine::represent_parallel;
+use reynoldsflow_host::outputs::Variant;
+use reynoldsflow_host::pair_pool::PairPool;
 
 mod common;
 use common::{COLS, FIXED, core_engine, moving_pair, read_gray};
@@ -94,15 +96,15 @@ fn computation(
             Box::new(core_engine::<COLS>(isa, prev, next, (w, h), None, scaling))
         }
         "parallel" => {
-            let prev = Gray::new(w, h, prev.to_vec()).unwrap();
-            let next = Gray::new(w, h, next.to_vec()).unwrap();
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads.max(1))
-                .build()
-                .unwrap();
+            let (prev, next) = (prev.to_vec(), next.to_vec());
+            // `FIXED`'s gains, as `--scale fixed:8,8`.
+            let scale = ScaleArg::Fixed { k_d: 8.0, k_c: 8.0 };
+            let mut pool = PairPool::new(scale, IntensityScale::PER_255, 1e-4, threads).unwrap();
             Box::new(move || {
-                let out = represent_parallel(&prev, &next, Params::DEFAULT, FIXED, &pool).unwrap();
-                black_box(out);
+                let prev = Frame::packed(&prev, w, h).unwrap();
+                let next = Frame::packed(&next, w, h).unwrap();
+                let out = pool.compute(prev, next).unwrap();
+                black_box(out.image(Variant::Dc));
             })
         }
         other => {

@@ -1,14 +1,15 @@
 //! Throughput of the whole representation `F_R` of a textured moving pair
 //! at 160×120, 320×240, 640×480 and 1280×720:
-//! - `core/strips`: the fixed engine (`Engine<142>`, full-height 128-px
+//! - `core/strips`: the fixed engine (`HostEngine`, full-height 128-px
 //!   strips) through `represent`, `Fixed` gains (one engine pass, as when
 //!   streaming), one thread;
 //! - `core/strips-minmax`: the same with per-frame min–max (two passes);
 //! - `core/tiles-64x64`: an `Engine<78>` over 64×64 tiles, `Fixed`;
-//! - `host/one-pass`: `compute_fixed_one_pass` (per-frame min–max in one
-//!   pass, f64 planes out), one thread;
-//! - `host/parallel-1t`, `host/parallel-2t`: `represent_parallel`
-//!   (strips on a rayon pool, per-frame min–max) on 1 and 2 threads;
+//! - `host/planes`: the host's whole-frame path with every plane out
+//!   (`FrameEngine::compute`: per-frame min–max in one pass, f64 planes),
+//!   one thread, as `run --npy` and `pair` compute;
+//! - `host/rgb`: the same path, the bytes alone (`FrameEngine::represent`,
+//!   per-frame min–max), as `run` computes by default;
 //! - `float/reference`: the float64 reference, `compute` + `representation`.
 //!
 //! `cargo bench -p reynoldsflow-host --bench representation [-- --quick]`
@@ -18,7 +19,7 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::Gray;
-use reynoldsflow_host::fixed_engine::{compute_fixed_one_pass, represent_parallel};
+use reynoldsflow_host::fixed_engine::FrameEngine;
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
 
 use reynoldsflow_host::dispatch::Isa;
@@ -57,25 +58,22 @@ fn representation_benches(c: &mut Criterion) {
         group.bench_function(BenchmarkId::from_parameter("core/tiles-64x64"), |b| {
             b.iter(&mut run)
         });
-        group.bench_function(BenchmarkId::from_parameter("host/one-pass"), |b| {
+        let (mut engine, mut rgb) = (FrameEngine::new(), Vec::new());
+        let minmax = Scaling::PerFrameMinMax;
+        group.bench_function(BenchmarkId::from_parameter("host/planes"), |b| {
             b.iter(|| {
-                let minmax = Scaling::PerFrameMinMax;
-                compute_fixed_one_pass(&gprev, &gnext, Params::DEFAULT, None, minmax).unwrap()
+                engine
+                    .compute(&gprev, &gnext, Params::DEFAULT, None, minmax)
+                    .unwrap()
             })
         });
-        for threads in [1, 2] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let id = format!("host/parallel-{threads}t");
-            group.bench_function(BenchmarkId::from_parameter(id), |b| {
-                b.iter(|| {
-                    let minmax = Scaling::PerFrameMinMax;
-                    represent_parallel(&gprev, &gnext, Params::DEFAULT, minmax, &pool).unwrap()
-                })
-            });
-        }
+        group.bench_function(BenchmarkId::from_parameter("host/rgb"), |b| {
+            b.iter(|| {
+                engine
+                    .represent(&gprev, &gnext, Params::DEFAULT, None, minmax, &mut rgb)
+                    .unwrap()
+            })
+        });
         group.bench_function(BenchmarkId::from_parameter("float/reference"), |b| {
             b.iter(|| {
                 let flow = compute(&gprev, &gnext, &FloatParams::default()).unwrap();

@@ -1,25 +1,39 @@
-//! One frame pair through the fixed-point core, collected into whole-frame
-//! planes: the fields (Q16.16) and magnitudes (Q32.32) as exact f64 copies
-//! of the core's values, and the RGB8 representation.
+//! The host's one whole-frame path through the fixed-point core: what
+//! `run`, `dataset`, `pair`, the GStreamer element, the Python package, the
+//! evaluation and the golden and conformance tests all compute with. One
+//! engine pass per pair whatever the scaling; per-frame min–max keeps what
+//! the byte step needs (each pixel's magnitudes, or every pixel when the
+//! fields are wanted) instead of running the engine twice.
+//!
+//! Two outputs of the same pass: [`FrameEngine::represent`], the RGB bytes
+//! alone (what `run` writes when no output needs the fields), and
+//! [`FrameEngine::compute`], every plane ([`FixedOutput`]). The tiles of
+//! one pair can also be spread over threads ([`pixels_on`], the element's
+//! latency path); every tiling gives the same bytes.
 
 use fixed::types::U32F32;
-use rayon::prelude::*;
+use std::sync::Mutex;
+
 use reynoldsflow_core::{
-    ByteScale, Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, rgb,
+    Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, rgb,
 };
 
 use crate::dispatch::{self, Isa, Pass};
-use crate::{FlowPlanes, Gray, HostError};
+use crate::{FlowPlanes, Gray, HostError, workers};
 
 /// Window columns of the host's engine: tiles up to
 /// [`MAX_TILE_WIDTH`] = 128 columns, about 45 KiB of working memory.
 /// Wider frames are cut into strips; every tiling gives the same bytes.
 pub const ENGINE_COLS: usize = 142;
 
-/// The host engine.
+/// The host engine: the one place its type is named (benches, tests and the
+/// element use this alias).
 pub type HostEngine = Engine<ENGINE_COLS>;
 
-/// Widest tile `compute_fixed` accepts (wider requests are refused with
+/// A tiling for [`HostEngine`].
+pub type HostPlan = Plan<ENGINE_COLS>;
+
+/// Widest tile the host accepts (wider requests are refused with
 /// [`reynoldsflow_core::Error::TileTooWide`] rather than silently cut).
 pub const MAX_TILE_WIDTH: usize = HostEngine::MAX_TILE_WIDTH;
 
@@ -36,36 +50,18 @@ pub struct FixedOutput {
     pub rep: Vec<u8>,
 }
 
-/// A whole frame of the core's output pixels, row-major: a [`Sink`] that
-/// each tile writes its rows into.
-struct PixelPlane {
-    width: usize,
-    pixels: Vec<FlowPixel>,
+/// A boxed host engine: too large for a worker's or a test thread's stack.
+pub fn boxed_engine() -> Box<HostEngine> {
+    Box::new(HostEngine::new())
 }
 
-impl PixelPlane {
-    fn new(width: usize, height: usize) -> Self {
-        Self {
-            width,
-            pixels: vec![FlowPixel::default(); width * height],
-        }
-    }
-}
-
-impl Sink for PixelPlane {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
-        let start = y * self.width + x;
-        self.pixels[start..start + pixels.len()].copy_from_slice(pixels);
-    }
-}
-
-/// Checked geometry of one run: configuration, tiling and the frames.
-fn prepare<'a>(
+/// Checked geometry of one pair: configuration, tiling and the frames.
+pub fn prepare<'a>(
     prev: &'a Gray,
     next: &'a Gray,
     params: Params,
     tile: Option<(usize, usize)>,
-) -> Result<(Plan<ENGINE_COLS>, FramePair<'a>), HostError> {
+) -> Result<(HostPlan, FramePair<'a>), HostError> {
     if prev.size() != next.size() {
         return Err(HostError::SizeMismatch {
             prev: prev.size(),
@@ -80,6 +76,85 @@ fn prepare<'a>(
     };
     let frames = FramePair::packed(&config, &prev.pixels, &next.pixels)?;
     Ok((plan, frames))
+}
+
+/// One tile's (or the whole frame's) segments of a frame-sized plane of
+/// pixels, and the extremes of the magnitudes it received: the sink that
+/// keeps every pixel. Row `k` of `rows` is frame row `origin.1 + k` from
+/// column `origin.0` on.
+struct PixelRows<'a> {
+    rows: Vec<&'a mut [FlowPixel]>,
+    origin: (usize, usize),
+    extremes: ExtremesSink,
+}
+
+impl<'a> PixelRows<'a> {
+    /// The whole of `pixels`, a `width`-wide plane.
+    fn whole(pixels: &'a mut [FlowPixel], width: usize) -> Self {
+        Self {
+            rows: pixels.chunks_mut(width.max(1)).collect(),
+            origin: (0, 0),
+            extremes: ExtremesSink::default(),
+        }
+    }
+}
+
+impl Sink for PixelRows<'_> {
+    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+        let (x0, y0) = self.origin;
+        let start = x.saturating_sub(x0);
+        if let Some(dst) = self
+            .rows
+            .get_mut(y.saturating_sub(y0))
+            .and_then(|row| row.get_mut(start..start + pixels.len()))
+        {
+            dst.copy_from_slice(pixels);
+        }
+        self.extremes.row(y, x, pixels);
+    }
+}
+
+/// Every pixel of `frames` into `pixels` (resized to the frame), each tile
+/// of `plan` once, spread over `threads` threads with an engine each;
+/// returns the extremes of the magnitudes.
+pub fn pixels_on(
+    threads: usize,
+    plan: &HostPlan,
+    frames: &FramePair<'_>,
+    pixels: &mut Vec<FlowPixel>,
+) -> Result<ExtremesSink, HostError> {
+    let (width, height) = (frames.prev().width(), frames.prev().height());
+    pixels.clear();
+    pixels.resize(width * height, FlowPixel::default());
+    let (tile_width, tile_height) = (plan.tile_width(), plan.tile_height());
+    // Each tile owns its segments of the rows it covers.
+    let mut tiles: Vec<PixelRows<'_>> = plan
+        .tiles()
+        .map(|tile| PixelRows {
+            rows: Vec::with_capacity(tile.height),
+            origin: (tile.x, tile.y),
+            extremes: ExtremesSink::default(),
+        })
+        .collect();
+    for (y, row) in pixels.chunks_mut(width).enumerate() {
+        let first = (y / tile_height) * plan.tiles_across();
+        let segments = row.chunks_mut(tile_width);
+        for (tile, segment) in tiles[first..].iter_mut().zip(segments) {
+            tile.rows.push(segment);
+        }
+    }
+    // One lock per tile, taken once: it hands the tile's rows to its thread.
+    let tiles: Vec<Mutex<PixelRows<'_>>> = tiles.into_iter().map(Mutex::new).collect();
+    let results = workers::map_indices(threads, tiles.len(), boxed_engine, |engine, index| {
+        let mut tile = tiles[index].lock().expect("each tile is taken once");
+        let pass = Pass::Tile(index);
+        dispatch::run(Isa::Best, engine, plan, frames, pass, &mut *tile).map(|()| tile.extremes)
+    });
+    let mut extremes = ExtremesSink::default();
+    for tile in results {
+        extremes.merge(tile?);
+    }
+    Ok(extremes)
 }
 
 /// The planes of a [`FixedOutput`] from the core's pixels; every conversion
@@ -101,12 +176,40 @@ fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> Fi
     }
 }
 
+/// The RGB bytes of every pixel of a `width`-wide frame, in `scaling` once
+/// the frame's `extremes` are known; bands of rows spread over `threads`
+/// threads.
+pub fn rgb_of(
+    pixels: &[FlowPixel],
+    width: usize,
+    extremes: ExtremesSink,
+    scaling: Scaling,
+    threads: usize,
+) -> Vec<u8> {
+    let (scale_d, scale_c) = scaling
+        .byte_scales(|| Ok::<_, std::convert::Infallible>(extremes))
+        .unwrap_or_else(|never| match never {});
+    let bytes = |band: &[FlowPixel]| -> Vec<u8> {
+        band.iter()
+            .flat_map(|p| rgb(p, &scale_d, &scale_c))
+            .collect()
+    };
+    let threads = threads.max(1);
+    if threads == 1 {
+        return bytes(pixels);
+    }
+    let rows = pixels.len().div_ceil(width.max(1));
+    let band = width.max(1) * rows.div_ceil(threads);
+    let bands: Vec<&[FlowPixel]> = pixels.chunks(band.max(1)).collect();
+    workers::map_indices(threads, bands.len(), || (), |(), i| bytes(bands[i])).concat()
+}
+
 /// Run the core on `(prev, next)` with `params`, in full-height strips as
 /// wide as the engine allows, or in `tile = (width, height)` tiles when
-/// given, the way firmware does: one engine, two passes for per-frame
-/// min–max (the core's `represent`), the widest instructions the CPU has.
-/// Fails when the frames differ in size, or the core refuses the size, the
-/// parameters or the tile (e.g. wider than [`MAX_TILE_WIDTH`]).
+/// given, the widest instructions the CPU has: [`FrameEngine::compute`] on
+/// a fresh engine. Fails when the frames differ in size, or the core
+/// refuses the size, the parameters or the tile (e.g. wider than
+/// [`MAX_TILE_WIDTH`]).
 pub fn compute_fixed(
     prev: &Gray,
     next: &Gray,
@@ -127,145 +230,78 @@ pub fn compute_fixed_on(
     tile: Option<(usize, usize)>,
     scaling: Scaling,
 ) -> Result<FixedOutput, HostError> {
-    let (plan, frames) = prepare(prev, next, params, tile)?;
-    let (width, height) = prev.size();
-    // Boxed: the engine is too large to keep on a test thread's stack for long.
-    let mut engine = Box::new(HostEngine::new());
-    let mut pixels = PixelPlane::new(width, height);
-    let mut rep = vec![0u8; 3 * width * height];
-    let pass = Pass::Represent(scaling, &mut rep);
-    dispatch::run(isa, &mut engine, &plan, &frames, pass, &mut pixels)?;
-    Ok(output(width, height, &pixels.pixels, rep))
+    FrameEngine::on(isa).compute(prev, next, params, tile, scaling)
 }
 
-/// The same output as [`compute_fixed`], bit for bit, in one engine pass:
-/// every pixel is kept, so per-frame min–max needs no second pass (what
-/// `run` uses per pair; its parallelism is across pairs). For one pair over
-/// many cores, see [`represent_parallel`].
-pub fn compute_fixed_one_pass(
-    prev: &Gray,
-    next: &Gray,
-    params: Params,
-    tile: Option<(usize, usize)>,
-    scaling: Scaling,
-) -> Result<FixedOutput, HostError> {
-    let (plan, frames) = prepare(prev, next, params, tile)?;
-    let (width, height) = prev.size();
-    let mut frame = PixelPlane::new(width, height);
-    let mut engine = Box::new(HostEngine::new());
-    dispatch::run(
-        Isa::Best,
-        &mut engine,
-        &plan,
-        &frames,
-        Pass::All,
-        &mut frame,
-    )?;
-    let (scale_d, scale_c) = scaling.byte_scales(|| {
-        let mut extremes = ExtremesSink::default();
-        extremes.row(0, 0, &frame.pixels);
-        Ok::<_, HostError>(extremes)
-    })?;
-    let rep = frame
-        .pixels
-        .iter()
-        .flat_map(|p| rgb(p, &scale_d, &scale_c))
-        .collect();
-    Ok(output(width, height, &frame.pixels, rep))
-}
-
-/// The representation alone, its full-height strips spread over `pool`:
-/// bit for bit the bytes of [`compute_fixed`], with no per-pixel planes.
-/// Each strip owns its columns of every output row, so strips write the RGB
-/// frame concurrently; per-frame min–max first gathers the extremes in a
-/// parallel pass of its own, as the core's `represent` does.
-pub fn represent_parallel(
-    prev: &Gray,
-    next: &Gray,
-    params: Params,
-    scaling: Scaling,
-    pool: &rayon::ThreadPool,
-) -> Result<Vec<u8>, HostError> {
-    let (plan, frames) = prepare(prev, next, params, None)?;
-    let (width, height) = prev.size();
-    let engine = || Box::new(HostEngine::new());
-    let (scale_d, scale_c) = scaling.byte_scales(|| {
-        pool.install(|| {
-            (0..plan.tile_count())
-                .into_par_iter()
-                .map_init(engine, |engine, index| {
-                    let mut extremes = ExtremesSink::default();
-                    strip(engine, &plan, &frames, index, &mut extremes).map(|()| extremes)
-                })
-                .try_reduce(ExtremesSink::default, |mut a, b| {
-                    a.merge(b);
-                    Ok(a)
-                })
-        })
-    })?;
-    let mut rep = vec![0u8; 3 * width * height];
-    // Split every row into the strips' column segments.
-    let mut strips: Vec<Vec<&mut [u8]>> = (0..plan.tile_count())
-        .map(|_| Vec::with_capacity(height))
-        .collect();
-    for row in rep.chunks_mut(3 * width) {
-        let mut rest = row;
-        for strip in &mut strips {
-            let (segment, tail) = rest.split_at_mut((3 * plan.tile_width()).min(rest.len()));
-            strip.push(segment);
-            rest = tail;
-        }
-    }
-    pool.install(|| {
-        strips
-            .par_iter_mut()
-            .enumerate()
-            .try_for_each_init(engine, |engine, (index, rows)| {
-                let mut sink = StripRgb {
-                    rows,
-                    scale_d,
-                    scale_c,
-                };
-                strip(engine, &plan, &frames, index, &mut sink)
-            })
-    })?;
-    Ok(rep)
-}
-
-/// The RGB representation of pair after pair, with nothing else computed
-/// and nothing allocated once the buffers have grown to the frame size:
-/// the engine and the magnitudes kept for per-frame min–max live as long
-/// as this value (one per worker). Bit for bit the bytes of
-/// [`compute_fixed`].
-pub struct RgbEngine {
+/// The host's whole-frame engine, reused pair after pair (one per worker):
+/// the engine and the magnitudes kept for per-frame min–max live as long as
+/// this value, so the RGB path allocates nothing once its buffers have
+/// grown to the frame size.
+pub struct FrameEngine {
     engine: Box<HostEngine>,
+    /// Which compilation of the engine pass runs.
+    isa: Isa,
     /// `[|v_d|, |v_c|]` of every pixel of the last pair (per-frame min–max
-    /// only): all that the byte step needs besides `fⁿ`, which waits in
-    /// the RGB frame's B channel.
+    /// of [`Self::represent`] only): all that the byte step needs besides
+    /// `fⁿ`, which waits in the RGB frame's B channel.
     magnitudes: Vec<[U32F32; 2]>,
 }
 
-impl Default for RgbEngine {
+impl Default for FrameEngine {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl RgbEngine {
-    /// An engine with empty buffers.
+impl FrameEngine {
+    /// An engine with empty buffers, the widest instructions the CPU has.
     pub fn new() -> Self {
+        Self::on(Isa::Best)
+    }
+
+    /// An engine whose pass is compiled for `isa` (every `isa` gives the
+    /// same bytes).
+    pub fn on(isa: Isa) -> Self {
         Self {
-            // Boxed: the engine is too large for a worker's stack.
-            engine: Box::new(HostEngine::new()),
+            engine: boxed_engine(),
+            isa,
             magnitudes: Vec::new(),
         }
     }
 
-    /// The representation of `(prev, next)` into `rgb` (resized to
+    /// Every plane of `(prev, next)`: fields, magnitudes and the
+    /// representation, in one engine pass. Fails as [`compute_fixed`] does.
+    pub fn compute(
+        &mut self,
+        prev: &Gray,
+        next: &Gray,
+        params: Params,
+        tile: Option<(usize, usize)>,
+        scaling: Scaling,
+    ) -> Result<FixedOutput, HostError> {
+        let (plan, frames) = prepare(prev, next, params, tile)?;
+        let (width, height) = prev.size();
+        let mut pixels = vec![FlowPixel::default(); width * height];
+        let mut sink = PixelRows::whole(&mut pixels, width);
+        dispatch::run(
+            self.isa,
+            &mut self.engine,
+            &plan,
+            &frames,
+            Pass::All,
+            &mut sink,
+        )?;
+        let extremes = sink.extremes;
+        let rep = rgb_of(&pixels, width, extremes, scaling, 1);
+        Ok(output(width, height, &pixels, rep))
+    }
+
+    /// The representation of `(prev, next)` alone into `rgb` (resized to
     /// `3 · width · height`), in one engine pass whatever the scaling:
     /// `Fixed` gains stream the engine's rows straight into the bytes;
     /// per-frame min–max keeps each pixel's two magnitudes and the frame's
-    /// extremes, then maps them to bytes. Fails as [`compute_fixed`] does.
+    /// extremes, then maps them to bytes. The bytes of [`Self::compute`]'s
+    /// `rep`; fails as [`compute_fixed`] does.
     pub fn represent(
         &mut self,
         prev: &Gray,
@@ -284,7 +320,7 @@ impl RgbEngine {
             // Known gains: the core's `represent` streams rows into the bytes in one pass.
             let pass = Pass::Represent(scaling, rgb);
             return Ok(dispatch::run(
-                Isa::Best,
+                self.isa,
                 engine,
                 &plan,
                 &frames,
@@ -301,7 +337,7 @@ impl RgbEngine {
                 rgb,
             },
         );
-        dispatch::run(Isa::Best, engine, &plan, &frames, Pass::All, &mut sink)?;
+        dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
         let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.0))?;
         for (dst, &[m_d, m_c]) in rgb.chunks_exact_mut(3).zip(&self.magnitudes) {
             let px = FlowPixel {
@@ -341,39 +377,6 @@ impl Sink for KeptMagnitudes<'_> {
     }
 }
 
-/// Strip `index` of `plan` into `sink`, with the CPU's widest instructions.
-fn strip<S: Sink>(
-    engine: &mut HostEngine,
-    plan: &Plan<ENGINE_COLS>,
-    frames: &FramePair<'_>,
-    index: usize,
-    sink: &mut S,
-) -> Result<(), reynoldsflow_core::Error> {
-    dispatch::run(Isa::Best, engine, plan, frames, Pass::Tile(index), sink)
-}
-
-/// One full-height strip's segments of the RGB rows (row `y` of the frame is
-/// `rows[y]`, starting at the strip's first column).
-struct StripRgb<'a, 'b> {
-    rows: &'a mut [&'b mut [u8]],
-    scale_d: ByteScale,
-    scale_c: ByteScale,
-}
-
-impl Sink for StripRgb<'_, '_> {
-    fn reads_fields(&self) -> bool {
-        false
-    }
-
-    fn row(&mut self, y: usize, _x: usize, pixels: &[FlowPixel]) {
-        if let Some(row) = self.rows.get_mut(y) {
-            for (dst, px) in row.chunks_exact_mut(3).zip(pixels) {
-                dst.copy_from_slice(&rgb(px, &self.scale_d, &self.scale_c));
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use fixed::types::U16F16;
@@ -396,47 +399,69 @@ mod tests {
         Gray::new(width, height, pixels).unwrap()
     }
 
+    /// The core's own whole-frame `represent` (two engine passes for
+    /// per-frame min–max), the bytes the one-pass path must give.
+    fn core_represent(a: &Gray, b: &Gray, scaling: Scaling) -> Vec<u8> {
+        let (plan, frames) = prepare(a, b, Params::DEFAULT, None).unwrap();
+        let mut rgb = vec![0u8; 3 * a.width * a.height];
+        let job = plan.bind(frames).unwrap();
+        reynoldsflow_core::represent(&mut boxed_engine(), &job, scaling, &mut rgb, ()).unwrap();
+        rgb
+    }
+
     #[test]
-    fn one_pass_equals_the_serial_engine() {
+    fn one_pass_gives_the_cores_two_pass_bytes_for_every_tiling() {
         let (a, b) = (frame(300, 45, 0), frame(300, 45, 1));
         for scaling in SCALINGS {
-            let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
-            for tile in [None, Some((17, 9)), Some((128, 45)), Some((1, 45))] {
-                let one_pass =
-                    compute_fixed_one_pass(&a, &b, Params::DEFAULT, tile, scaling).unwrap();
-                assert!(one_pass == serial, "tile {tile:?}, {scaling:?}");
+            let strips = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
+            assert!(strips.rep == core_represent(&a, &b, scaling), "{scaling:?}");
+            assert!(strips.m_d.iter().any(|&m| m > 0.0));
+            for tile in [(17, 9), (128, 45), (1, 45), (7, 5), (64, 3)].map(Some) {
+                let tiled = compute_fixed(&a, &b, Params::DEFAULT, tile, scaling).unwrap();
+                assert!(tiled == strips, "tile {tile:?}, {scaling:?}");
             }
         }
     }
 
     #[test]
-    fn parallel_representation_equals_the_serial_engine() {
+    fn tiles_over_threads_give_the_serial_pixels() {
         let (a, b) = (frame(300, 45, 2), frame(300, 45, 3));
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        for scaling in SCALINGS {
-            let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
-            let parallel = represent_parallel(&a, &b, Params::DEFAULT, scaling, &pool).unwrap();
-            assert!(parallel == serial.rep, "{scaling:?}");
+        let serial = compute_fixed(&a, &b, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
+        let mut pixels = Vec::new();
+        for threads in [1, 2, 3] {
+            for tile in [None, Some((17, 9)), Some((100, 20))] {
+                let (plan, frames) = prepare(&a, &b, Params::DEFAULT, tile).unwrap();
+                let extremes = pixels_on(threads, &plan, &frames, &mut pixels).unwrap();
+                for scaling in SCALINGS {
+                    let rep = rgb_of(&pixels, a.width, extremes, scaling, threads);
+                    let expected = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
+                    assert!(
+                        rep == expected.rep,
+                        "{threads} threads, {tile:?}, {scaling:?}"
+                    );
+                }
+                let m_d: Vec<f64> = pixels.iter().map(|p| p.m_d.to_num()).collect();
+                assert!(m_d == serial.m_d, "{threads} threads, {tile:?}");
+            }
         }
     }
 
     #[test]
-    fn rgb_engine_equals_the_serial_engine_while_reused() {
-        let mut engine = RgbEngine::new();
+    fn the_rgb_path_gives_the_planes_bytes_while_reused() {
+        let mut engine = FrameEngine::new();
         let mut rgb = Vec::new();
         // Reused across sizes: larger, smaller, then larger again.
         for (width, height, seed) in [(300, 45, 4), (17, 9, 6), (300, 45, 8)] {
             let (a, b) = (frame(width, height, seed), frame(width, height, seed + 1));
             for scaling in SCALINGS {
-                let serial = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
+                let planes = engine
+                    .compute(&a, &b, Params::DEFAULT, None, scaling)
+                    .unwrap();
                 for tile in [None, Some((17, 9))] {
                     engine
                         .represent(&a, &b, Params::DEFAULT, tile, scaling, &mut rgb)
                         .unwrap();
-                    assert!(rgb == serial.rep, "{width}x{height} {tile:?} {scaling:?}");
+                    assert!(rgb == planes.rep, "{width}x{height} {tile:?} {scaling:?}");
                 }
             }
         }
@@ -454,18 +479,6 @@ mod tests {
                 reynoldsflow_core::Error::TileTooWide { .. }
             ))
         ));
-    }
-
-    #[test]
-    fn every_tiling_gives_the_same_output() {
-        let (a, b) = (frame(150, 20, 0), frame(150, 20, 1));
-        let strips = compute_fixed(&a, &b, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
-        for tile in [(1, 1), (7, 5), (128, 20), (64, 3)] {
-            let tiled = compute_fixed(&a, &b, Params::DEFAULT, Some(tile), Scaling::PerFrameMinMax)
-                .unwrap();
-            assert!(tiled == strips, "tile {tile:?}");
-        }
-        assert!(strips.m_d.iter().any(|&m| m > 0.0));
     }
 
     #[test]

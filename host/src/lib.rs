@@ -33,6 +33,7 @@ pub mod pipeline;
 pub mod reference;
 pub mod sequence;
 pub mod viz;
+pub mod workers;
 
 pub use error::{HostError, ImageProblem};
 pub use flow_planes::FlowPlanes;

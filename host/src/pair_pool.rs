@@ -1,19 +1,17 @@
 //! One frame pair at a time over a pool of threads, for a consumer that
 //! gets frames one by one and wants each result at once (the GStreamer
-//! element): the frame is cut into tiles balanced over the threads and
-//! computed in one engine pass, so no latency is added. `run` instead
-//! spreads whole pairs over its workers ([`pipeline`](crate::pipeline));
-//! both keep every core busy, and every tiling gives the same bytes.
+//! element): the host's whole-frame path ([`fixed_engine`]) with the tiles
+//! balanced over the threads ([`fixed_engine::pixels_on`]), so no latency
+//! is added. `run` instead spreads whole pairs over its workers
+//! ([`pipeline`](crate::pipeline)); both keep every core busy, and every
+//! tiling gives the same bytes.
 
-use rayon::prelude::*;
 use reynoldsflow_core::{
-    Config, ExtremesSink, FlowPixel, Frame, FramePair, HALO, IntensityScale, Params, Plan, Scaling,
-    Sink, rgb,
+    Config, ExtremesSink, FlowPixel, Frame, FramePair, HALO, IntensityScale, Params, Scaling,
 };
 
 use crate::cli::values::{EngineKind, ScaleArg};
-use crate::dispatch::{self, Isa, Pass};
-use crate::fixed_engine::{ENGINE_COLS, HostEngine, MAX_TILE_WIDTH};
+use crate::fixed_engine::{self, HostPlan, MAX_TILE_WIDTH};
 use crate::outputs::{OutputSpec, PairFields, Variant};
 use crate::pipeline::{self, Compute};
 use crate::{FlowPlanes, HostError};
@@ -23,7 +21,6 @@ pub struct PairPool {
     params: Params,
     scaling: Scaling,
     threads: usize,
-    pool: rayon::ThreadPool,
     /// The last pair's pixels, row-major (kept to reuse the allocation).
     pixels: Vec<FlowPixel>,
 }
@@ -35,7 +32,7 @@ pub struct PairPixels<'a> {
     pixels: &'a [FlowPixel],
     extremes: ExtremesSink,
     scaling: Scaling,
-    pool: &'a rayon::ThreadPool,
+    threads: usize,
 }
 
 impl PairPool {
@@ -49,16 +46,10 @@ impl PairPool {
     ) -> Result<Self, HostError> {
         Compute::new(EngineKind::Fixed, scale, intensity_scale, lambda, None)?;
         let threads = threads.max(1);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("reynoldsflow-{i}"))
-            .build()
-            .map_err(|e| HostError::invalid("threads", e.to_string()))?;
         Ok(Self {
             params: pipeline::core_params(intensity_scale, lambda)?,
             scaling: pipeline::core_scaling(scale)?,
             threads,
-            pool,
             pixels: Vec::new(),
         })
     }
@@ -84,76 +75,17 @@ impl PairPool {
         }
         let config = Config::new(width, height, self.params)?;
         let (tile_width, tile_height) = balanced_tile(width, height, self.threads);
-        let plan = Plan::<ENGINE_COLS>::new(config, tile_width, tile_height)?;
+        let plan = HostPlan::new(config, tile_width, tile_height)?;
         let frames = FramePair::new(&config, prev, next)?;
-        self.pixels.clear();
-        self.pixels.resize(width * height, FlowPixel::default());
-
-        // Each tile owns its segments of the rows it covers.
-        let mut tiles: Vec<TileRows<'_>> = plan
-            .tiles()
-            .map(|tile| TileRows {
-                rows: Vec::with_capacity(tile.height),
-                origin: (tile.x, tile.y),
-                extremes: ExtremesSink::default(),
-            })
-            .collect();
-        for (y, row) in self.pixels.chunks_mut(width).enumerate() {
-            let first = (y / tile_height) * plan.tiles_across();
-            let segments = row.chunks_mut(tile_width);
-            for (tile, segment) in tiles[first..].iter_mut().zip(segments) {
-                tile.rows.push(segment);
-            }
-        }
-        let extremes = self.pool.install(|| {
-            tiles
-                .par_iter_mut()
-                .enumerate()
-                .map_init(
-                    || Box::new(HostEngine::new()),
-                    |engine, (index, tile)| {
-                        let pass = Pass::Tile(index);
-                        dispatch::run(Isa::Best, engine, &plan, &frames, pass, tile)
-                            .map(|()| tile.extremes)
-                    },
-                )
-                .try_reduce(ExtremesSink::default, |mut a, b| {
-                    a.merge(b);
-                    Ok(a)
-                })
-        })?;
+        let extremes = fixed_engine::pixels_on(self.threads, &plan, &frames, &mut self.pixels)?;
         Ok(PairPixels {
             width,
             height,
             pixels: &self.pixels,
             extremes,
             scaling: self.scaling,
-            pool: &self.pool,
+            threads: self.threads,
         })
-    }
-}
-
-/// One tile's segments of the frame's rows (tile row `k` is `rows[k]`)
-/// and the extremes of its magnitudes.
-struct TileRows<'a> {
-    rows: Vec<&'a mut [FlowPixel]>,
-    /// Frame column and row of the tile's top-left pixel.
-    origin: (usize, usize),
-    extremes: ExtremesSink,
-}
-
-impl Sink for TileRows<'_> {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
-        let (x0, y0) = self.origin;
-        let start = x.saturating_sub(x0);
-        if let Some(dst) = self
-            .rows
-            .get_mut(y.saturating_sub(y0))
-            .and_then(|row| row.get_mut(start..start + pixels.len()))
-        {
-            dst.copy_from_slice(pixels);
-        }
-        self.extremes.row(y, x, pixels);
     }
 }
 
@@ -190,21 +122,13 @@ impl PairPixels<'_> {
     /// The RGB8 image of `variant`, row-major: exactly what `reynoldsflow
     /// run --variant` writes for this pair.
     pub fn image(&self, variant: Variant) -> Vec<u8> {
-        let (scale_d, scale_c) = self
-            .scaling
-            .byte_scales(|| Ok::<_, std::convert::Infallible>(self.extremes))
-            .unwrap_or_else(|never| match never {});
-        let mut rep = vec![0u8; 3 * self.pixels.len()];
-        let width = self.width.max(1);
-        self.pool.install(|| {
-            rep.par_chunks_mut(3 * width)
-                .zip(self.pixels.par_chunks(width))
-                .for_each(|(out, row)| {
-                    for (dst, px) in out.chunks_exact_mut(3).zip(row) {
-                        dst.copy_from_slice(&rgb(px, &scale_d, &scale_c));
-                    }
-                });
-        });
+        let rep = fixed_engine::rgb_of(
+            self.pixels,
+            self.width,
+            self.extremes,
+            self.scaling,
+            self.threads,
+        );
         // Only the colour wheel reads the fields.
         let plane = |f: fn(&FlowPixel) -> f64| match variant {
             Variant::Hsv => self.pixels.iter().map(f).collect(),

@@ -11,7 +11,7 @@
 //!
 //! Only what the outputs need is computed: when no output needs the fields
 //! ([`OutputSpec::needs_fields`]), a worker computes the representation's
-//! bytes alone ([`RgbEngine`]). Frames, engines and output buffers are
+//! bytes alone ([`FrameEngine::represent`]). Frames, engines and output buffers are
 //! reused from pair to pair ([`Pool`]), so a warm run allocates no frame-
 //! sized memory.
 
@@ -25,7 +25,7 @@ use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
 
 use crate::cli::values::{EngineKind, ScaleArg, TileSize};
-use crate::fixed_engine::{self, RgbEngine};
+use crate::fixed_engine::FrameEngine;
 use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame_into, y4m_header};
 use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
@@ -96,6 +96,16 @@ impl Compute {
 
     /// One pair, exactly as `reynoldsflow pair` computes it.
     pub fn pair(&self, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
+        self.pair_with(&mut FrameEngine::new(), prev, next)
+    }
+
+    /// [`Self::pair`] with the reused buffers of `engine`.
+    pub fn pair_with(
+        &self,
+        engine: &mut FrameEngine,
+        prev: &Gray,
+        next: &Gray,
+    ) -> Result<PairFields, HostError> {
         if prev.size() != next.size() {
             return Err(HostError::SizeMismatch {
                 prev: prev.size(),
@@ -106,9 +116,9 @@ impl Compute {
             None => float_pair(prev, next, self.intensity_scale, self.lambda, self.scale),
             Some((params, scaling)) => {
                 let tile = self.tile.map(|t| (t.width, t.height));
-                // One worker per pair already keeps the cores busy: each pair on one
-                // thread, in the single-pass path (the same bytes as `compute_fixed`).
-                let out = fixed_engine::compute_fixed_one_pass(prev, next, params, tile, scaling)
+                // One worker per pair already keeps the cores busy: each pair on one thread.
+                let out = engine
+                    .compute(prev, next, params, tile, scaling)
                     .map_err(tile_error)?;
                 Ok(PairFields {
                     planes: out.planes,
@@ -123,14 +133,14 @@ impl Compute {
     /// buffers of `engine` and nothing else.
     pub fn representation(
         &self,
-        engine: &mut RgbEngine,
+        engine: &mut FrameEngine,
         prev: &Gray,
         next: &Gray,
         rgb: &mut Vec<u8>,
     ) -> Result<(), HostError> {
         match self.fixed {
             None => {
-                let fields = self.pair(prev, next)?;
+                let fields = self.pair_with(engine, prev, next)?;
                 rgb.clear();
                 rgb.extend_from_slice(&fields.rep);
                 Ok(())
@@ -389,66 +399,31 @@ pub fn process(
         });
         for _ in 0..threads {
             let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
-            scope.spawn(move || {
-                let mut worker = Worker {
-                    compute,
-                    needs_fields,
-                    dir,
-                    stream: stream_spec,
-                    engine: RgbEngine::new(),
-                    rgb: Vec::new(),
-                };
-                loop {
-                    // The lock is held only while waiting for the next job.
-                    let Ok(job) = job_rx.lock().expect("no worker panics holding it").recv() else {
-                        return;
-                    };
-                    if stop.load(Ordering::SeqCst) {
-                        continue;
-                    }
-                    // A panic must not leave the others waiting for this pair.
-                    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        worker.work(&job, buffers.payloads.take().unwrap_or_default())
-                    }))
-                    .unwrap_or_else(|_| {
-                        Err(HostError::invalid(
-                            format!("frame {}", job.prev.stem),
-                            "internal error (panic) while computing this pair",
-                        ))
-                    });
-                    let msg = match result {
-                        Ok(payload) => Msg::Done {
-                            index: job.index,
-                            stem: job.prev.stem.clone(),
-                            size: job.prev.gray.size(),
-                            payload,
-                        },
-                        Err(e) => Msg::Failed(e),
-                    };
-                    // The last of the two jobs (and the reader) to use a frame hands it back.
-                    for frame in [job.prev, job.next] {
-                        if let Some(frame) = Arc::into_inner(frame) {
-                            buffers.frames.put(frame);
-                        }
-                    }
-                    if msg_tx.send(msg).is_err() {
-                        return;
-                    }
-                }
-            });
+            let worker = Worker {
+                compute,
+                needs_fields,
+                dir,
+                stream: stream_spec,
+                engine: FrameEngine::new(),
+                rgb: Vec::new(),
+            };
+            scope.spawn(move || worker.take_jobs(job_rx, &msg_tx, stop, buffers));
         }
         drop(msg_tx);
-        collect(
-            msg_rx,
-            Some(token_tx),
+        let collector = Collector {
+            tokens: Some(token_tx),
             stop,
-            &buffers.payloads,
+            payloads: &buffers.payloads,
             dir,
-            stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
+            stream: stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
             fps,
-            options.keep_count,
-            on_output,
-        )
+            keep_count: options.keep_count,
+            delivered: 0,
+            header_written: false,
+            closed: false,
+            error: None,
+        };
+        collector.collect(msg_rx, on_output)
     })
 }
 
@@ -516,18 +491,67 @@ struct Worker<'a> {
     needs_fields: bool,
     dir: Option<&'a DirWriter>,
     stream: Option<(&'a OutputSpec, StreamFormat)>,
-    engine: RgbEngine,
+    engine: FrameEngine,
     /// The `--variant` image of the pair (when it is not the payload itself).
     rgb: Vec<u8>,
 }
 
 impl Worker<'_> {
+    /// Take pairs until the reader is done: compute each (unless the run
+    /// is stopping), hand its frames back, report the result.
+    fn take_jobs(
+        mut self,
+        jobs: &Mutex<Receiver<Job>>,
+        msgs: &Sender<Msg>,
+        stop: &AtomicBool,
+        buffers: &Buffers,
+    ) {
+        // The lock is held only while waiting for the next job.
+        while let Ok(job) = jobs.lock().expect("no worker panics holding it").recv() {
+            if stop.load(Ordering::SeqCst) {
+                continue;
+            }
+            let msg = self.job_message(&job, buffers.payloads.take().unwrap_or_default());
+            // The last of the two jobs (and the reader) to use a frame hands it back.
+            for frame in [job.prev, job.next] {
+                if let Some(frame) = Arc::into_inner(frame) {
+                    buffers.frames.put(frame);
+                }
+            }
+            if msgs.send(msg).is_err() {
+                return;
+            }
+        }
+    }
+
+    /// One pair's result, a panic included: it must not leave the others
+    /// waiting for this pair.
+    fn job_message(&mut self, job: &Job, payload: Vec<u8>) -> Msg {
+        let result =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.work(job, payload)))
+                .unwrap_or_else(|_| {
+                    Err(HostError::invalid(
+                        format!("frame {}", job.prev.stem),
+                        "internal error (panic) while computing this pair",
+                    ))
+                });
+        match result {
+            Ok(payload) => Msg::Done {
+                index: job.index,
+                stem: job.prev.stem.clone(),
+                size: job.prev.gray.size(),
+                payload,
+            },
+            Err(e) => Msg::Failed(e),
+        }
+    }
+
     /// Compute one pair, then write its files or encode its stream frame
     /// into `payload` (a used buffer, overwritten), which is returned.
     fn work(&mut self, job: &Job, mut payload: Vec<u8>) -> Result<Vec<u8>, HostError> {
         let (prev, next) = (&job.prev.gray, &job.next.gray);
         if self.needs_fields {
-            let fields = self.compute.pair(prev, next)?;
+            let fields = self.compute.pair_with(&mut self.engine, prev, next)?;
             if let Some(dir) = self.dir {
                 dir.write(&job.prev.stem, &fields)?;
             }
@@ -569,118 +593,154 @@ impl Worker<'_> {
 type Delivery = (String, (usize, usize), Vec<u8>);
 
 /// This thread's part: results in frame order, the stream, the count.
-#[allow(clippy::too_many_arguments)]
-fn collect<'w, 'o>(
-    msgs: Receiver<Msg>,
-    mut tokens: Option<SyncSender<()>>,
-    stop: &AtomicBool,
-    payloads: &Pool<Vec<u8>>,
-    dir: Option<&DirWriter>,
-    mut stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
+struct Collector<'a, 'w, 'o> {
+    /// Hands a token back to the reader per delivered result; dropped to
+    /// unblock it when the run stops.
+    tokens: Option<SyncSender<()>>,
+    stop: &'a AtomicBool,
+    payloads: &'a Pool<Vec<u8>>,
+    dir: Option<&'a DirWriter>,
+    stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
     fps: (u32, u32),
     keep_count: bool,
-    on_output: &mut dyn FnMut(),
-) -> Result<Summary, HostError> {
-    let mut pending: BTreeMap<usize, Delivery> = BTreeMap::new();
-    let mut next = 0;
-    let mut error: Option<HostError> = None;
-    let mut input_error: Option<HostError> = None;
-    let mut end = None;
-    let mut last: Option<(String, Vec<u8>)> = None;
-    let mut header_written = false;
-    let mut closed = false;
-    let stdout_error = |e: std::io::Error| HostError::io("stdout", e);
-    for msg in msgs {
-        match msg {
-            Msg::Done {
-                index,
-                stem,
-                size,
-                payload,
-            } => {
-                pending.insert(index, (stem, size, payload));
+    /// Results delivered so far: the index of the next one.
+    delivered: usize,
+    header_written: bool,
+    /// The stream's reader closed it.
+    closed: bool,
+    /// The first failure of a pair or of the stream.
+    error: Option<HostError>,
+}
+
+fn stdout_error(e: std::io::Error) -> HostError {
+    HostError::io("stdout", e)
+}
+
+impl Collector<'_, '_, '_> {
+    /// Deliver every result in order as it arrives, then sum up.
+    fn collect(
+        mut self,
+        msgs: Receiver<Msg>,
+        on_output: &mut dyn FnMut(),
+    ) -> Result<Summary, HostError> {
+        let mut pending: BTreeMap<usize, Delivery> = BTreeMap::new();
+        let mut input_error: Option<HostError> = None;
+        let mut end = None;
+        let mut last: Option<(String, Vec<u8>)> = None;
+        for msg in msgs {
+            match msg {
+                Msg::Done {
+                    index,
+                    stem,
+                    size,
+                    payload,
+                } => {
+                    pending.insert(index, (stem, size, payload));
+                }
+                Msg::Failed(e) => self.fail(Some(e)),
+                Msg::InputFailed(e) => input_error = Some(e),
+                Msg::End {
+                    frames,
+                    last_stem,
+                    size,
+                } => end = Some((frames, last_stem, size)),
             }
-            Msg::Failed(e) => {
-                stop.store(true, Ordering::SeqCst);
-                tokens = None; // unblocks the reader
-                error.get_or_insert(e);
-            }
-            Msg::InputFailed(e) => input_error = Some(e),
-            Msg::End {
-                frames,
-                last_stem,
-                size,
-            } => end = Some((frames, last_stem, size)),
-        }
-        if error.is_some() || closed {
-            continue;
-        }
-        while let Some((stem, size, payload)) = pending.remove(&next) {
-            if let Some((format, w)) = stream.as_mut() {
-                let written = (|| {
-                    if *format == StreamFormat::Y4m && !header_written {
-                        w.write_all(y4m_header(size.0, size.1, fps).as_bytes())?;
-                        header_written = true;
-                    }
-                    w.write_all(&payload)?;
-                    w.flush()
-                })();
-                if let Err(e) = written {
-                    stop.store(true, Ordering::SeqCst);
-                    tokens = None;
-                    if e.kind() == std::io::ErrorKind::BrokenPipe {
-                        closed = true;
-                    } else {
-                        error = Some(stdout_error(e));
-                    }
+            while self.error.is_none() && !self.closed {
+                let Some((stem, size, payload)) = pending.remove(&self.delivered) else {
+                    break;
+                };
+                if !self.deliver(size, &payload) {
                     break;
                 }
+                on_output();
+                if let Some((_, used)) = last.replace((stem, payload)) {
+                    self.payloads.put(used);
+                }
             }
+        }
+        if let Some(e) = self.error.take().or(input_error) {
+            return Err(e);
+        }
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            return Err(interrupted());
+        }
+        if self.closed {
+            return Ok(Summary {
+                outputs: self.delivered,
+                results: self.delivered,
+                stream_closed: true,
+                ..Summary::default()
+            });
+        }
+        let (frames, last_stem, size) = end.expect("the reader ends with End or Failed");
+        let mut summary = Summary {
+            frames,
+            results: self.delivered,
+            outputs: self.delivered,
+            size,
+            stream_closed: false,
+        };
+        if self.keep_count
+            && let (Some((from, payload)), Some(to)) = (last, last_stem)
+        {
+            self.repeat_last(&from, &to, &payload)?;
             on_output();
-            if let Some((_, used)) = last.replace((stem, payload)) {
-                payloads.put(used);
-            }
-            next += 1;
-            if let Some(t) = &tokens {
-                let _ = t.send(());
-            }
+            summary.outputs += 1;
+        }
+        Ok(summary)
+    }
+
+    /// Stop the run: no new pair starts, the reader is unblocked; `error`
+    /// (if any) is kept unless one came first.
+    fn fail(&mut self, error: Option<HostError>) {
+        self.stop.store(true, Ordering::SeqCst);
+        self.tokens = None;
+        if let Some(e) = error {
+            self.error.get_or_insert(e);
         }
     }
-    if let Some(e) = error.or(input_error) {
-        return Err(e);
-    }
-    if INTERRUPTED.load(Ordering::SeqCst) {
-        return Err(interrupted());
-    }
-    if closed {
-        return Ok(Summary {
-            outputs: next,
-            results: next,
-            stream_closed: true,
-            ..Summary::default()
-        });
-    }
-    let (frames, last_stem, size) = end.expect("the reader ends with End or Failed");
-    let mut summary = Summary {
-        frames,
-        results: next,
-        outputs: next,
-        size,
-        stream_closed: false,
-    };
-    if keep_count && let (Some((from, payload)), Some(to)) = (last, last_stem) {
-        if let Some(dir) = dir {
-            dir.repeat(&from, &to)?;
+
+    /// Put the next result out (on the stream, if any); false when the
+    /// stream failed or closed, which stops the run.
+    fn deliver(&mut self, size: (usize, usize), payload: &[u8]) -> bool {
+        if let Some((format, w)) = self.stream.as_mut() {
+            let written = (|| {
+                if *format == StreamFormat::Y4m && !self.header_written {
+                    w.write_all(y4m_header(size.0, size.1, self.fps).as_bytes())?;
+                    self.header_written = true;
+                }
+                w.write_all(payload)?;
+                w.flush()
+            })();
+            if let Err(e) = written {
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    self.closed = true;
+                    self.fail(None);
+                } else {
+                    self.fail(Some(stdout_error(e)));
+                }
+                return false;
+            }
         }
-        if let Some((_, w)) = stream.as_mut() {
-            w.write_all(&payload)
+        self.delivered += 1;
+        if let Some(t) = &self.tokens {
+            let _ = t.send(());
+        }
+        true
+    }
+
+    /// `--keep-count`: the last result once more, labelled with the last frame.
+    fn repeat_last(&mut self, from: &str, to: &str, payload: &[u8]) -> Result<(), HostError> {
+        if let Some(dir) = self.dir {
+            dir.repeat(from, to)?;
+        }
+        if let Some((_, w)) = self.stream.as_mut() {
+            w.write_all(payload)
                 .and_then(|()| w.flush())
                 .map_err(stdout_error)?;
         }
-        on_output();
-        summary.outputs += 1;
+        Ok(())
     }
-    Ok(summary)
 }
 
 #[cfg(test)]

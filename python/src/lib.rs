@@ -12,12 +12,12 @@ use numpy::ndarray::Axis;
 use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 
 use reynoldsflow_host::cli::dataset;
 use reynoldsflow_host::cli::status::Record;
+use reynoldsflow_host::fixed_engine::FrameEngine;
 use reynoldsflow_host::outputs::{PairFields, flo};
-use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic};
+use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic, workers};
 
 mod errors;
 mod frames;
@@ -203,22 +203,16 @@ fn represent_clip<'py>(
                     .collect::<Result<Vec<Gray>, HostError>>()?;
                 let mut rgb = vec![0u8; (results + usize::from(keep_count)) * frame_bytes];
                 let mut scores = vec![0.0f64; results];
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .map_err(|e| HostError::invalid("threads", e.to_string()))?;
-                pool.install(|| {
-                    rgb[..results * frame_bytes]
-                        .par_chunks_mut(frame_bytes)
-                        .zip(scores.par_iter_mut())
-                        .enumerate()
-                        .try_for_each(|(i, (image, score))| {
-                            let fields = compute.pair(&grays[i], &grays[i + 1])?;
-                            image.copy_from_slice(&spec.image(&fields));
-                            *score = mean_speed(&fields.planes);
-                            Ok::<_, HostError>(())
-                        })
-                })?;
+                let pairs =
+                    workers::map_indices(threads, results, FrameEngine::new, |engine, i| {
+                        let fields = compute.pair_with(engine, &grays[i], &grays[i + 1])?;
+                        Ok::<_, HostError>((spec.image(&fields), mean_speed(&fields.planes)))
+                    });
+                for (i, pair) in pairs.into_iter().enumerate() {
+                    let (image, score) = pair?;
+                    rgb[i * frame_bytes..(i + 1) * frame_bytes].copy_from_slice(&image);
+                    scores[i] = score;
+                }
                 if keep_count {
                     rgb.copy_within(
                         (results - 1) * frame_bytes..results * frame_bytes,

@@ -4,9 +4,9 @@
 //! tiles (a 25 KiB engine) and a 9.9 KiB cue grid.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{
-    ByteScale, Config, CueParams, Engine, Field, FramePair, MotionCues, Params, Plan,
-    PreviousFrameMinMax, Region, Rgb565Sink, Threshold, View, grid_cells,
+use reynoldsflow_core::{ByteScale, Config, Engine, FramePair, Params, Plan, PreviousFrameMinMax};
+use reynoldsflow_cues::{
+    CueParams, Field, MotionCues, Region, Rgb565Sink, Threshold, View, grid_cells,
 };
 
 use crate::DemoError;

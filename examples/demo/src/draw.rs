@@ -22,9 +22,9 @@ use embedded_graphics::pixelcolor::{Rgb565, WebColors};
 use embedded_graphics::prelude::*;
 use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
 use embedded_graphics::text::{Baseline, Text};
-use reynoldsflow_core::Region;
+use heapless::String;
 use reynoldsflow_core::fixed::types::U32F32;
-use reynoldsflow_core::heapless::String;
+use reynoldsflow_cues::Region;
 
 /// Panel size: each view of the frame is drawn 1:1 in one quarter.
 pub const PANEL: Size = Size::new(160, 120);

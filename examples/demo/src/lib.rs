@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 
 use embedded_graphics::pixelcolor::Rgb565;
 use embedded_graphics_simulator::{OutputSettingsBuilder, SimulatorDisplay};
-use reynoldsflow_core::{CueError, Error, Region};
+use reynoldsflow_core::Error;
+use reynoldsflow_cues::{CueError, Region};
 
 pub mod analysis;
 pub mod draw;

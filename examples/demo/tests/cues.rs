@@ -3,10 +3,8 @@
 //! into tiles or strips, and a full list keeps the strongest.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{
-    Config, CueParams, Engine, Field, FrameLevel, FramePair, MotionCues, Params, Plan, Region,
-    RowStream, Sink, Threshold,
-};
+use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, RowStream, Sink};
+use reynoldsflow_cues::{CueParams, Field, FrameLevel, MotionCues, Region, Threshold};
 use reynoldsflow_demo::analysis::{Analysis, Cues, HEIGHT, MAX_CUES, WIDTH, cue_params};
 use reynoldsflow_demo::scene::{Lighting, PixelBox, Scene, static_frame};
 

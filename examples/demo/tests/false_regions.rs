@@ -5,7 +5,8 @@
 //! hold the claims made there.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{Config, CueParams, Engine, Field, FramePair, Params, Plan, Threshold};
+use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan};
+use reynoldsflow_cues::{CueParams, Field, Threshold};
 use reynoldsflow_demo::analysis::{Cues, HEIGHT, WIDTH, cue_params};
 use reynoldsflow_demo::scene::{Lighting, Scene, static_frame};
 

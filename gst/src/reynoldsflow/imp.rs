@@ -18,7 +18,8 @@ use gst_base::subclass::prelude::*;
 use gst_video::VideoFormat;
 use gst_video::prelude::*;
 use reynoldsflow_core::fixed::types::U32F32;
-use reynoldsflow_core::{Config, Frame, MAX_SIDE, Params, Region, Sink};
+use reynoldsflow_core::{Config, Frame, MAX_SIDE, Params, Sink};
+use reynoldsflow_cues::Region;
 use reynoldsflow_host::cli::values::{self, ScaleArg};
 use reynoldsflow_host::pair_pool::PairPool;
 

@@ -39,7 +39,7 @@ use crate::outputs::{DirWriter, OutputSpec};
 use crate::pipeline::{self, Compute, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
 use crate::sequence::{self, FrameSource, InputSpec, input_error};
-use crate::{HostError, atomic};
+use crate::{HostError, atomic, workers};
 
 /// Examples shown by `reynoldsflow dataset --help`.
 pub const EXAMPLES: &str = "\
@@ -482,56 +482,16 @@ fn which_shard(args: &DatasetArgs) -> Result<Shard, HostError> {
     }
 }
 
-/// Run the subcommand.
+/// Run the subcommand: check, find the items, run them, report.
 pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     args.limits.apply();
     let shard = which_shard(args)?;
     let threads = args.engine.threads();
     // Checked before anything is created; the workers' share is set below.
     ItemRunner::new(&args.engine, &args.output, threads, args.force)?;
-    if args.dst.exists() && !args.dst.is_dir() {
-        return Err(input_error(
-            &args.dst,
-            "destination exists and is not a folder",
-        ));
-    }
-    let log = StatusLog::open(args.status.as_deref())?;
-    fs::create_dir_all(&args.dst).map_err(|e| {
-        HostError::io(
-            &args.dst,
-            std::io::Error::new(e.kind(), format!("cannot create the destination: {e}")),
-        )
-    })?;
-    let skip = fs::canonicalize(&args.dst).ok();
-    let all = match &args.files_from {
-        Some(list) => manifest(&args.src, list)?,
-        None => discover(&args.src, skip.as_deref())?,
-    };
-    if all.is_empty() {
-        return Err(input_error(
-            args.files_from.as_deref().unwrap_or(&args.src),
-            "no videos or frame folders found (videos by extension: mp4, avi, y4m, ...; frames: png, jpg, pgm, ...)",
-        ));
-    }
-
-    // Two items writing one folder would mix their outputs: refuse the later
-    // one, judged on every item so that all shards agree.
-    let mut items = Vec::new();
-    let mut outcomes: Vec<Option<Outcome>> = Vec::new();
-    for (i, item) in all.iter().enumerate() {
-        if !shard.contains(&shard_key(&args.src, item)) {
-            continue;
-        }
-        let clash = all[..i].iter().find(|o| o.rel == item.rel);
-        outcomes.push(clash.map(|o| {
-            Outcome::Failed(format!(
-                "its output folder {} is also the output of {}; rename one",
-                args.dst.join(&item.rel).display(),
-                o.src.display()
-            ))
-        }));
-        items.push(item.clone());
-    }
+    let log = prepare_destination(args)?;
+    let all = find_items(args)?;
+    let (items, mut outcomes) = shard_items(args, shard, &all);
     for (item, outcome) in items.iter().zip(&outcomes) {
         if let Some(outcome) = outcome {
             log.write(&record(item, &args.dst.join(&item.rel), outcome, 0.0))?;
@@ -550,60 +510,196 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
         threads.div_ceil(workers),
         args.force,
     )?;
-    let progress = Progress::new(Some(items.len() as u64), "items");
-    let frames_done = AtomicUsize::new(0);
-    let next = AtomicUsize::new(0);
-    let results = Mutex::new(Vec::new());
-    let log_error = Mutex::new(None);
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| {
-                loop {
-                    if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
-                        return;
-                    }
-                    let Some(&i) = todo.get(next.fetch_add(1, Ordering::SeqCst)) else {
-                        return;
-                    };
-                    let mut tick = || {
-                        let n = frames_done.fetch_add(1, Ordering::Relaxed) + 1;
-                        let rate = n as f64 / started.elapsed().as_secs_f64().max(1e-9);
-                        progress.message(format!("{n} results, {rate:.1}/s"));
-                    };
-                    let item_started = Instant::now();
-                    let out = args.dst.join(&items[i].rel);
-                    let outcome = runner.process(&items[i], &out, &mut tick);
-                    let seconds = item_started.elapsed().as_secs_f64();
-                    if let Err(e) = log.write(&record(&items[i], &out, &outcome, seconds)) {
-                        log_error
-                            .lock()
-                            .expect("no panics holding it")
-                            .get_or_insert(e);
-                    }
-                    if let Outcome::Failed(why) = &outcome
-                        && Progress::enabled()
-                    {
-                        progress.println(&failure_line(&items[i], why));
-                    }
-                    progress.inc();
-                    results
-                        .lock()
-                        .expect("no panics holding it")
-                        .push((i, outcome));
-                }
-            });
-        }
-    });
-    progress.finish();
-    for (i, outcome) in results.into_inner().expect("workers are done") {
+    let run = ItemsRun {
+        args,
+        runner: &runner,
+        log: &log,
+        items: &items,
+        started,
+    };
+    let (results, log_error) = run.on_workers(&todo, workers);
+    for (i, outcome) in results {
         outcomes[i] = Some(outcome);
     }
+    let failures = report(args, shard, all.len(), &items, &outcomes, started);
+    if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(HostError::io(
+            &args.dst,
+            std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "interrupted; rerun the same command to finish the unfinished items",
+            ),
+        ));
+    }
+    if let Some(e) = log_error {
+        return Err(e);
+    }
+    if failures > 0 {
+        return Err(HostError::invalid(
+            "dataset",
+            format!(
+                "{failures} of {} failed (listed above); the rest are done",
+                count(items.len(), "item")
+            ),
+        ));
+    }
+    Ok(())
+}
 
+/// The destination folder, created, and the status log opened.
+fn prepare_destination(args: &DatasetArgs) -> Result<StatusLog, HostError> {
+    if args.dst.exists() && !args.dst.is_dir() {
+        return Err(input_error(
+            &args.dst,
+            "destination exists and is not a folder",
+        ));
+    }
+    let log = StatusLog::open(args.status.as_deref())?;
+    fs::create_dir_all(&args.dst).map_err(|e| {
+        HostError::io(
+            &args.dst,
+            std::io::Error::new(e.kind(), format!("cannot create the destination: {e}")),
+        )
+    })?;
+    Ok(log)
+}
+
+/// Every item of the dataset (the manifest's, or those found under SRC);
+/// none is an error.
+fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
+    let skip = fs::canonicalize(&args.dst).ok();
+    let all = match &args.files_from {
+        Some(list) => manifest(&args.src, list)?,
+        None => discover(&args.src, skip.as_deref())?,
+    };
+    if all.is_empty() {
+        return Err(input_error(
+            args.files_from.as_deref().unwrap_or(&args.src),
+            "no videos or frame folders found (videos by extension: mp4, avi, y4m, ...; frames: png, jpg, pgm, ...)",
+        ));
+    }
+    Ok(all)
+}
+
+/// The items of `shard`, each with its outcome already decided (`Some`:
+/// it clashes with an earlier item) or still to run (`None`).
+fn shard_items(
+    args: &DatasetArgs,
+    shard: Shard,
+    all: &[Item],
+) -> (Vec<Item>, Vec<Option<Outcome>>) {
+    // Two items writing one folder would mix their outputs: refuse the later
+    // one, judged on every item so that all shards agree.
+    let mut items = Vec::new();
+    let mut outcomes: Vec<Option<Outcome>> = Vec::new();
+    for (i, item) in all.iter().enumerate() {
+        if !shard.contains(&shard_key(&args.src, item)) {
+            continue;
+        }
+        let clash = all[..i].iter().find(|o| o.rel == item.rel);
+        outcomes.push(clash.map(|o| {
+            Outcome::Failed(format!(
+                "its output folder {} is also the output of {}; rename one",
+                args.dst.join(&item.rel).display(),
+                o.src.display()
+            ))
+        }));
+        items.push(item.clone());
+    }
+    (items, outcomes)
+}
+
+/// What the workers of one `dataset` run share.
+struct ItemsRun<'a> {
+    args: &'a DatasetArgs,
+    runner: &'a ItemRunner,
+    log: &'a StatusLog,
+    items: &'a [Item],
+    started: Instant,
+}
+
+impl ItemsRun<'_> {
+    /// The items `todo` (indices into `items`) on `workers` threads, taken
+    /// in order until none is left or the run is interrupted: every
+    /// outcome, and the first status-log error.
+    fn on_workers(
+        &self,
+        todo: &[usize],
+        workers: usize,
+    ) -> (Vec<(usize, Outcome)>, Option<HostError>) {
+        let progress = Progress::new(Some(self.items.len() as u64), "items");
+        let frames_done = AtomicUsize::new(0);
+        let log_error = Mutex::new(None);
+        let outcomes = workers::map_indices(
+            workers,
+            todo.len(),
+            || (),
+            |(), k| {
+                let interrupted = pipeline::INTERRUPTED.load(Ordering::SeqCst);
+                (!interrupted).then(|| {
+                    (
+                        todo[k],
+                        self.one(todo[k], &progress, &frames_done, &log_error),
+                    )
+                })
+            },
+        );
+        progress.finish();
+        (
+            outcomes.into_iter().flatten().collect(),
+            log_error.into_inner().expect("workers are done"),
+        )
+    }
+
+    /// Item `i`: run, logged, shown.
+    fn one(
+        &self,
+        i: usize,
+        progress: &Progress,
+        frames_done: &AtomicUsize,
+        log_error: &Mutex<Option<HostError>>,
+    ) -> Outcome {
+        let mut tick = || {
+            let n = frames_done.fetch_add(1, Ordering::Relaxed) + 1;
+            let rate = n as f64 / self.started.elapsed().as_secs_f64().max(1e-9);
+            progress.message(format!("{n} results, {rate:.1}/s"));
+        };
+        let item = &self.items[i];
+        let item_started = Instant::now();
+        let out = self.args.dst.join(&item.rel);
+        let outcome = self.runner.process(item, &out, &mut tick);
+        let seconds = item_started.elapsed().as_secs_f64();
+        if let Err(e) = self.log.write(&record(item, &out, &outcome, seconds)) {
+            log_error
+                .lock()
+                .expect("no panics holding it")
+                .get_or_insert(e);
+        }
+        if let Outcome::Failed(why) = &outcome
+            && Progress::enabled()
+        {
+            progress.println(&failure_line(item, why));
+        }
+        progress.inc();
+        outcome
+    }
+}
+
+/// The closing summary line and one line per failure, on stderr; returns
+/// the number of failures.
+fn report(
+    args: &DatasetArgs,
+    shard: Shard,
+    found: usize,
+    items: &[Item],
+    outcomes: &[Option<Outcome>],
+    started: Instant,
+) -> usize {
     let seconds = started.elapsed().as_secs_f64();
     let (mut done, mut skipped, mut frames, mut outputs) = (0, 0, 0, 0);
     let mut failures = Vec::new();
     let mut not_started = 0;
-    for (item, outcome) in items.iter().zip(&outcomes) {
+    for (item, outcome) in items.iter().zip(outcomes) {
         match outcome {
             Some(Outcome::Done(s)) => {
                 done += 1;
@@ -622,7 +718,7 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
             " (shard {}/{} of {})",
             shard.index,
             shard.count,
-            count(all.len(), "item")
+            count(found, "item")
         )
     };
     eprintln!(
@@ -643,27 +739,5 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     for (item, why) in &failures {
         eprintln!("{}", failure_line(item, why));
     }
-    if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
-        return Err(HostError::io(
-            &args.dst,
-            std::io::Error::new(
-                std::io::ErrorKind::Interrupted,
-                "interrupted; rerun the same command to finish the unfinished items",
-            ),
-        ));
-    }
-    if let Some(e) = log_error.into_inner().expect("workers are done") {
-        return Err(e);
-    }
-    if !failures.is_empty() {
-        return Err(HostError::invalid(
-            "dataset",
-            format!(
-                "{} of {} failed (listed above); the rest are done",
-                failures.len(),
-                count(items.len(), "item")
-            ),
-        ));
-    }
-    Ok(())
+    failures.len()
 }

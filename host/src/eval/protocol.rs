@@ -4,7 +4,6 @@
 
 use std::time::{Duration, Instant};
 
-use rayon::prelude::*;
 use reynoldsflow_core::{Params, Scaling};
 
 use super::baselines::{HornSchunck, LucasKanade};
@@ -13,7 +12,7 @@ use super::metrics;
 use super::scenes::{Pattern, Scenario, SceneSpec, Sequence};
 use super::truth::{self, Pose};
 use crate::reference::{self, FloatFlow, FloatParams, FloatScaling};
-use crate::{Gray, HostError, fixed_engine};
+use crate::{Gray, HostError, fixed_engine, workers};
 
 /// A flow estimate under evaluation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -233,15 +232,22 @@ impl SequenceResult {
     }
 }
 
-/// Run every sequence of `config`, in parallel over rayon's pool; results
-/// in [`EvalConfig::sequences`] order.
+/// Run every sequence of `config`, in parallel on every core; results in
+/// [`EvalConfig::sequences`] order.
 pub fn run_all(config: &EvalConfig) -> Result<Vec<SequenceResult>, HostError> {
-    config
-        .sequences()
-        .into_par_iter()
-        .enumerate()
-        .map(|(i, (spec, level_index))| evaluate_sequence(config, spec, level_index, i as u64))
-        .collect()
+    let sequences = config.sequences();
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    workers::map_indices(
+        cores,
+        sequences.len(),
+        || (),
+        |(), i| {
+            let (spec, level_index) = sequences[i];
+            evaluate_sequence(config, spec, level_index, i as u64)
+        },
+    )
+    .into_iter()
+    .collect()
 }
 
 /// The vectors of `flow` at `idx`.

@@ -294,26 +294,22 @@ pub struct ReportContext<'a> {
 /// The markdown report.
 pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
     let config = ctx.config;
-    let ref_level = config.reference_level;
-    let HornSchunck {
-        alpha,
-        iterations,
-        omega,
-    } = config.horn_schunck;
-    let LucasKanade {
-        radius,
-        iterations: lk_iterations,
-        min_eigenvalue,
-    } = config.lucas_kanade;
-    let pairs: usize = results.iter().map(|r| r.pairs.len()).sum();
-    let fixed_max = results
-        .iter()
-        .flat_map(|r| &r.pairs)
-        .map(|p| p.fixed_max_diff)
-        .fold(0.0, f64::max);
-    let d = config.small_scale_divisor;
     let mut s = String::new();
+    title(&mut s, results, ctx);
+    setup_scenes(&mut s, config);
+    setup_methods(&mut s, results, config);
+    setup_measures(&mut s);
+    result_tables(&mut s, results, config);
+    figures(&mut s, ctx);
+    time_per_method(&mut s, results);
+    s.push_str("\nEvery measure of every pair is in [results.csv](results.csv).\n");
+    s
+}
 
+/// The report's title and what was run.
+fn title(s: &mut String, results: &[SequenceResult], ctx: &ReportContext<'_>) {
+    let config = ctx.config;
+    let pairs: usize = results.iter().map(|r| r.pairs.len()).sum();
     let _ = writeln!(
         s,
         "# ReynoldsFlow evaluation: controlled scenes with exact ground truth\n\n\
@@ -328,7 +324,11 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
         Method::ALL.len(),
         ctx.elapsed.as_secs_f64()
     );
+}
 
+/// Setup: the scenes and the levels swept.
+fn setup_scenes(s: &mut String, config: &EvalConfig) {
+    let ref_level = config.reference_level;
     s.push_str("## Setup\n\n");
     let _ = writeln!(
         s,
@@ -362,6 +362,26 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
             .collect();
         let _ = writeln!(s, "| {} | {} |", scenario.name(), levels.join(", "));
     }
+}
+
+/// Setup: the methods and their parameters.
+fn setup_methods(s: &mut String, results: &[SequenceResult], config: &EvalConfig) {
+    let HornSchunck {
+        alpha,
+        iterations,
+        omega,
+    } = config.horn_schunck;
+    let LucasKanade {
+        radius,
+        iterations: lk_iterations,
+        min_eigenvalue,
+    } = config.lucas_kanade;
+    let fixed_max = results
+        .iter()
+        .flat_map(|r| &r.pairs)
+        .map(|p| p.fixed_max_diff)
+        .fold(0.0, f64::max);
+    let d = config.small_scale_divisor;
     let _ = writeln!(
         s,
         "\n**Methods.**\n\n\
@@ -384,6 +404,10 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
         s_den = 255.0 * d,
         lam = 1e-4 / (d * d),
     );
+}
+
+/// Setup: the measures and how we read the paper's.
+fn setup_measures(s: &mut String) {
     let _ = writeln!(
         s,
         "**Measures** (per frame pair, then averaged over the pairs of a sequence). Dense: every \
@@ -403,7 +427,11 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
          definitions are **our reading**. R and ACS ignore magnitude, so they also grade v_c and \
          v_d, which are not displacements in pixels at the default scale.\n"
     );
+}
 
+/// The summary and every results table.
+fn result_tables(s: &mut String, results: &[SequenceResult], config: &EvalConfig) {
+    let ref_level = config.reference_level;
     s.push_str("## Where ReynoldsFlow beats or trails the baselines\n\n");
     s.push_str(&summary(results, config));
 
@@ -437,7 +465,10 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
             sweep_table(results, config, pattern)
         );
     }
+}
 
+/// The figures and the images written beside the report.
+fn figures(s: &mut String, ctx: &ReportContext<'_>) {
     s.push_str("## Figures\n\n");
     for (name, caption) in ctx.figures {
         let _ = writeln!(s, "**{caption}**\n\n![{caption}]({name})\n");
@@ -445,7 +476,10 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
     for (name, caption) in ctx.images {
         let _ = writeln!(s, "- [{name}]({name}): {caption}");
     }
+}
 
+/// Seconds per method, over all pairs.
+fn time_per_method(s: &mut String, results: &[SequenceResult]) {
     s.push_str(
         "\n## Time per method (all pairs, summed over threads)\n\n| method | s |\n|---|---:|\n",
     );
@@ -463,8 +497,6 @@ pub fn markdown(results: &[SequenceResult], ctx: &ReportContext<'_>) -> String {
         };
         let _ = writeln!(s, "| {}{note} | {t:.2} |", m.label());
     }
-    s.push_str("\nEvery measure of every pair is in [results.csv](results.csv).\n");
-    s
 }
 
 /// Mean over the clean reference-level moving sequences of a pattern of

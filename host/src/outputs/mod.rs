@@ -19,14 +19,14 @@
 //! ([`StreamFormat`]).
 
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use npyz::WriterBuilder;
 
 use crate::{FlowPlanes, HostError, atomic, image_io, viz};
 
+#[cfg(feature = "crash-injection")]
+pub mod crash_injection;
 pub mod flo;
 
 /// The representation variants (the paper's ablation), and the colour wheel.
@@ -361,41 +361,6 @@ pub fn y4m_frame_into(rgb: &[u8], out: &mut Vec<u8>) {
     }
 }
 
-/// The environment variable of the crash test hook: after this many
-/// results have been written, the next write leaves a partial temp file
-/// and the process aborts, as a kill in the middle of a write would.
-pub const ABORT_AFTER_ENV: &str = "REYNOLDSFLOW_ABORT_AFTER";
-
-/// Results written by this process (for [`ABORT_AFTER_ENV`]).
-static WRITTEN: AtomicUsize = AtomicUsize::new(0);
-
-fn abort_hook(dir: &Path, files: &[(PathBuf, Vec<u8>)]) {
-    let Some(limit) = std::env::var(ABORT_AFTER_ENV)
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-    else {
-        return;
-    };
-    if WRITTEN.fetch_add(1, Ordering::SeqCst) < limit {
-        return;
-    }
-    if let Some((rel, bytes)) = files.first() {
-        let path = dir.join(rel);
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-        let parent = path.parent().unwrap_or(dir);
-        if let Ok(tmp) = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".tmp")
-            .tempfile_in(parent)
-        {
-            let _ = tmp.as_file().write_all(&bytes[..bytes.len() / 2]);
-            let _ = tmp.keep();
-        }
-    }
-    eprintln!("reynoldsflow: {ABORT_AFTER_ENV}={limit}: aborting");
-    std::process::abort();
-}
-
 /// Writes results into an output folder.
 #[derive(Debug)]
 pub struct DirWriter {
@@ -472,7 +437,8 @@ impl DirWriter {
     }
 
     fn write_files(&self, files: &[(PathBuf, Vec<u8>)]) -> Result<(), HostError> {
-        abort_hook(&self.root, files);
+        #[cfg(feature = "crash-injection")]
+        crash_injection::abort_hook(&self.root, files);
         for (rel, bytes) in files {
             atomic::write_file(&self.root.join(rel), bytes)?;
         }

@@ -16,7 +16,9 @@ use core::f32::consts::PI;
 use fixed::types::I16F16;
 use micromath::F32Ext;
 
-use crate::{ByteScale, Config, Error, Field, FlowPixel, Sink, rgb};
+use reynoldsflow_core::{ByteScale, Config, Error, FlowPixel, Sink, rgb};
+
+use crate::Field;
 
 /// Pack 8-bit red, green and blue into RGB565 by truncation (the top 5, 6
 /// and 5 bits), as `Rgb565::new(r >> 3, g >> 2, b >> 3)` does.
@@ -298,7 +300,7 @@ mod tests {
 
     #[test]
     fn the_sink_fills_a_plane() {
-        let config = Config::new(4, 3, crate::Params::DEFAULT).unwrap();
+        let config = Config::new(4, 3, reynoldsflow_core::Params::DEFAULT).unwrap();
         let mut small = [0u16; 11];
         assert_eq!(
             Rgb565Sink::new(&config, &mut small, View::Luma).err(),

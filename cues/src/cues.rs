@@ -50,7 +50,7 @@
 //!   A mean is `⌊sum / count⌋` in Q16.16, returned as `U32F32`: the mean of
 //!   the magnitudes within `2^-16` px.
 //! - Counts are `u32` (a frame has fewer than `2^32` pixels); coordinates
-//!   `u16` ([`MAX_SIDE`](crate::MAX_SIDE)). Accumulators saturate if the sink
+//!   `u16` ([`MAX_SIDE`](reynoldsflow_core::MAX_SIDE)). Accumulators saturate if the sink
 //!   is fed more pixels than a frame holds, so nothing overflows or panics.
 //!
 //! # Memory
@@ -73,7 +73,7 @@ use core::fmt;
 use fixed::types::{I16F16, U16F16, U32F32};
 use heapless::Vec;
 
-use crate::{Config, FlowPixel, Sink};
+use reynoldsflow_core::{Config, FlowPixel, Sink};
 
 /// Which of the representation's two fields a cue or a view reads.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -352,9 +352,8 @@ impl Cell {
 ///
 /// ```
 /// use reynoldsflow_core::fixed::types::U32F32;
-/// use reynoldsflow_core::{
-///     Config, CueParams, Engine, Field, FramePair, MotionCues, Params, Plan, Threshold, grid_cells,
-/// };
+/// use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan};
+/// use reynoldsflow_cues::{CueParams, Field, MotionCues, Threshold, grid_cells};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// const W: usize = 48;
 /// const H: usize = 32;
@@ -712,7 +711,7 @@ fn keep_strongest<const N: usize>(list: &mut Vec<Region, N>, region: Region) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Params;
+    use reynoldsflow_core::Params;
     use std::vec::Vec as StdVec;
 
     fn px(m: f64) -> FlowPixel {
