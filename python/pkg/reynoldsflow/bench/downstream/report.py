@@ -36,6 +36,9 @@ def atomic_write(path: Path, data: bytes) -> None:
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp's 0600 would outlive the rename
         with os.fdopen(fd, "wb") as f:
             f.write(data)
         os.replace(tmp, path)
@@ -150,7 +153,7 @@ def write_report(path: Path, *, rows, inputs, descriptions: Dict[str, str], subs
         "",
         "| input | what |",
         "|---|---|",
-        *(f"| {n} | {descriptions[n]} |" for n in inputs),
+        *(f"| {n} | {descriptions[n].replace('|', chr(92) + '|')} |" for n in inputs),
         "",
     ]
     atomic_write(path, "\n".join(out).encode())
