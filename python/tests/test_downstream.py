@@ -69,7 +69,11 @@ def test_quick_csv_has_every_input_seed_and_subset(quick):
         for key in ("located_3px", "ap"):
             v = float(r[key])
             assert math.isnan(v) or 0 <= v <= 1, r
-        assert int(r["drone_frames"]) > 0 and int(r["free_frames"]) > 0, r
+        # A contrast bin may hold no drone clip in a small run; the factor
+        # subsets always hold both kinds of clip.
+        assert int(r["free_frames"]) > 0, r
+        if not r["subset"].startswith("all, contrast"):
+            assert int(r["drone_frames"]) > 0, r
 
 
 def test_quick_trained_every_input(quick):
