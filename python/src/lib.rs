@@ -451,7 +451,11 @@ fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) 
 /// ReynoldsFlow: curl-free and divergence-free motion fields of frame
 /// pairs, and their RGB representation [|v_d|, |v_c|, frame n], computed by
 /// the same code as the `reynoldsflow` command line (same bytes).
+///
+/// Compiled as `reynoldsflow._native`; the package's `__init__.py`
+/// re-exports all of it as `reynoldsflow`.
 #[pymodule]
+#[pyo3(name = "_native")]
 fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(represent, m)?)?;

@@ -1,0 +1,1 @@
+"""Benchmarks that drive the package (``python -m reynoldsflow.bench.downstream``)."""
