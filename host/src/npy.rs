@@ -50,8 +50,8 @@ pub fn write(path: &Path, height: usize, width: usize, data: &[f64]) -> Result<(
     atomic::write_file(path, &encode(height, width, data))
 }
 
-/// The shape a `.npy` header states, read before npyz parses it.
-fn header_shape(bytes: &[u8]) -> Option<Vec<u64>> {
+/// The header dictionary of a `.npy`, as text.
+fn header_text(bytes: &[u8]) -> Option<&str> {
     let rest = bytes.strip_prefix(b"\x93NUMPY")?;
     let (&major, rest) = rest.split_first()?;
     let rest = rest.get(1..)?;
@@ -66,7 +66,87 @@ fn header_shape(bytes: &[u8]) -> Option<Vec<u64>> {
         ),
         _ => return None,
     };
-    let header = std::str::from_utf8(rest.get(..len)?).ok()?;
+    std::str::from_utf8(rest.get(..len)?).ok()
+}
+
+/// Whether a header is the plain dictionary NumPy writes: quoted keys, and
+/// values that are quoted strings, `True`/`False` or tuples of integers.
+/// Checked in one linear pass before npyz parses it: npyz's Python-literal
+/// grammar backtracks exponentially on some malformed float literals
+/// (found by fuzz/npy: one 200-byte header ran for over ten minutes).
+fn plain_header(header: &str) -> bool {
+    let rest = &mut header.as_bytes();
+    if !eat(rest, b"{") {
+        return false;
+    }
+    loop {
+        if eat(rest, b"}") {
+            return rest.iter().all(u8::is_ascii_whitespace);
+        }
+        let value = |rest: &mut &[u8]| {
+            quoted(rest) || eat(rest, b"True") || eat(rest, b"False") || int_tuple(rest)
+        };
+        if !(quoted(rest) && eat(rest, b":") && value(rest)) {
+            return false;
+        }
+        if !eat(rest, b",") && !rest.trim_ascii_start().starts_with(b"}") {
+            return false;
+        }
+    }
+}
+
+/// `token` after optional whitespace, consumed from `rest`.
+fn eat(rest: &mut &[u8], token: &[u8]) -> bool {
+    match rest.trim_ascii_start().strip_prefix(token) {
+        Some(after) => {
+            *rest = after;
+            true
+        }
+        None => false,
+    }
+}
+
+/// A quoted string without escapes, consumed from `rest`.
+fn quoted(rest: &mut &[u8]) -> bool {
+    let text = rest.trim_ascii_start();
+    let Some((&quote, body)) = text.split_first() else {
+        return false;
+    };
+    if quote != b'\'' && quote != b'"' {
+        return false;
+    }
+    match body.iter().position(|&c| c == quote || c == b'\\') {
+        Some(end) if body[end] == quote => {
+            *rest = &body[end + 1..];
+            true
+        }
+        _ => false,
+    }
+}
+
+/// A tuple of decimal integers (`(2, 3)`, `(2, 3, )`, `()`), consumed from `rest`.
+fn int_tuple(rest: &mut &[u8]) -> bool {
+    let Some(body) = rest.trim_ascii_start().strip_prefix(b"(") else {
+        return false;
+    };
+    let Some(end) = body.iter().position(|&c| c == b')') else {
+        return false;
+    };
+    let items = &body[..end];
+    let plain = items
+        .split(|&c| c == b',')
+        .map(<[u8]>::trim_ascii)
+        .enumerate()
+        .all(|(i, item)| {
+            item.iter().all(u8::is_ascii_digit)
+                && (!item.is_empty() || i > 0 || items.trim_ascii().is_empty())
+        });
+    *rest = &body[end + 1..];
+    plain
+}
+
+/// The shape a `.npy` header states, read before npyz parses it.
+fn header_shape(header: &str) -> Option<Vec<u64>> {
     let key = header
         .find("'shape'")
         .or_else(|| header.find("\"shape\""))?;
@@ -85,7 +165,11 @@ fn header_shape(bytes: &[u8]) -> Option<Vec<u64>> {
 /// be in the file before npyz sees it: npyz multiplies the axes unchecked
 /// (an overflow panic, or a wrong count; found by fuzz/npy).
 pub(crate) fn open(bytes: &[u8]) -> Result<npyz::NpyFile<&[u8]>, String> {
-    let shape = header_shape(bytes).ok_or("not a .npy file: no readable NumPy header")?;
+    let header = header_text(bytes).ok_or("not a .npy file: no readable NumPy header")?;
+    if !plain_header(header) {
+        return Err("not a .npy file: the header is not a plain NumPy dictionary".into());
+    }
+    let shape = header_shape(header).ok_or("not a .npy file: the header states no shape")?;
     let values = shape.iter().try_fold(1u64, |n, &axis| n.checked_mul(axis));
     if values.is_none_or(|n| n.saturating_mul(8) > bytes.len() as u64) {
         return Err(format!(
@@ -187,6 +271,34 @@ mod tests {
         w.finish().unwrap();
         assert!(decode(&bytes).unwrap_err().contains("2-D"));
         assert!(decode(b"garbage").unwrap_err().contains("not a .npy"));
+    }
+
+    /// fuzz/npy (a 300 s campaign): after a plain `shape`, 40 nested `[`
+    /// kept npyz's literal parser backtracking for over ten minutes. Refused
+    /// before npyz parses it, as is anything beyond NumPy's plain dictionary.
+    #[test]
+    fn a_header_beyond_numpys_dictionary_is_refused_before_npyz() {
+        let slow = include_bytes!("npy_regressions/nested-brackets.npy");
+        let err = decode(slow).unwrap_err();
+        assert!(err.contains("not a plain NumPy dictionary"), "{err}");
+        let plain = encode(2, 3, &[0.0; 6]);
+        assert!(plain_header(header_text(&plain).unwrap()));
+        for header in [
+            "{'shape': (2, 3), 'x': 1.5e3}",
+            "{'shape': (2, 3), 'descr': ['<f8']}",
+            "{'shape': (2, 3)} trailing",
+            "{'shape' (2, 3)}",
+            "{'shape': (2, 3.0)}",
+            "{'unterminated: (2, 3)}",
+        ] {
+            assert!(!plain_header(header), "{header}");
+        }
+        for header in [
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }   \n",
+            "{\"shape\": (), \"fortran_order\": True}",
+        ] {
+            assert!(plain_header(header), "{header}");
+        }
     }
 
     /// fuzz/npy: a shape of 2³² × 2³² overflowed npyz's element count.
