@@ -3,7 +3,7 @@
 //! element): the host's whole-frame path ([`fixed_engine`]) with the tiles
 //! balanced over the threads ([`fixed_engine::pixels_on`]), so no latency
 //! is added. `run` instead spreads whole pairs over its workers
-//! ([`pipeline`](crate::pipeline)); both keep every core busy, and every
+//! ([`pipeline`]); both keep every core busy, and every
 //! tiling gives the same bytes.
 
 use reynoldsflow_core::{

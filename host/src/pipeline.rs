@@ -12,7 +12,7 @@
 //! Only what the outputs need is computed: when no output needs the fields
 //! ([`OutputSpec::needs_fields`]), a worker computes the representation's
 //! bytes alone ([`FrameEngine::represent`]). Frames, engines and output buffers are
-//! reused from pair to pair ([`Pool`]), so a warm run allocates no frame-
+//! reused from pair to pair (a `Pool`), so a warm run allocates no frame-
 //! sized memory.
 
 use std::collections::BTreeMap;
