@@ -170,7 +170,11 @@ pub(crate) fn open(bytes: &[u8]) -> Result<npyz::NpyFile<&[u8]>, String> {
         return Err("not a .npy file: the header is not a plain NumPy dictionary".into());
     }
     let shape = header_shape(header).ok_or("not a .npy file: the header states no shape")?;
-    let values = shape.iter().try_fold(1u64, |n, &axis| n.checked_mul(axis));
+    // Zero axes count as one: npyz multiplies the other axes all the same
+    // (a zero axis hid an overflowing shape from this check; fuzz/npy).
+    let values = shape
+        .iter()
+        .try_fold(1u64, |n, &axis| n.checked_mul(axis.max(1)));
     if values.is_none_or(|n| n.saturating_mul(8) > bytes.len() as u64) {
         return Err(format!(
             "shape {shape:?} needs more data than the file's {} bytes",
@@ -299,6 +303,15 @@ mod tests {
         ] {
             assert!(plain_header(header), "{header}");
         }
+    }
+
+    /// fuzz/npy (a 300 s campaign): `(0, 42949672294967296, 4294967296)`
+    /// has no values, yet the product of its other axes overflows.
+    #[test]
+    fn a_zero_axis_does_not_hide_an_overflowing_shape() {
+        let bytes = include_bytes!("npy_regressions/zero-axis-overflow.npy");
+        let err = decode(bytes).unwrap_err();
+        assert!(err.contains("shape"), "{err}");
     }
 
     /// fuzz/npy: a shape of 2³² × 2³² overflowed npyz's element count.
