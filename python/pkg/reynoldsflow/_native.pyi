@@ -1,31 +1,5 @@
-"""ReynoldsFlow: curl-free and divergence-free motion fields of frame pairs,
-and their RGB representation [|v_d|, |v_c|, frame n], computed by the same
-code as the ``reynoldsflow`` command line (the same bytes).
-
-Frames are 8-bit gray NumPy arrays of shape (H, W) or (H, W, 1), any
-strides. A wrong type, dtype or number of dimensions raises ``TypeError``;
-a wrong shape or parameter value ``ValueError``; a file that cannot be
-read ``OSError`` (``FileNotFoundError``, ...). The GIL is released while
-computing, so threads compute in parallel.
-
-Options shared by the computing functions (all keyword-only):
-
-- ``engine``: ``"fixed"`` (the fixed-point core, what embedded targets
-  compute; default) or ``"float"`` (the float64 reference).
-- ``scale``: ``"minmax"`` (per-frame min-max; default), ``"fixed:KD,KC"``
-  or ``(k_d, k_c)``: constant gains of |v_d| and |v_c| (the fixed engine
-  rounds them to 1/65536).
-- ``intensity_scale``: s in f = pixel * s, 6144/2**32 <= s <= 1; default
-  1/255. A float is taken as the exact ratio it rounds from (``1/255``);
-  also a ``fractions.Fraction``, a pair ``(num, den)`` or ``"1/255"``.
-- ``lam``: the Tikhonov term lambda of the 2x2 solve (default 1e-4).
-- ``tile``: ``(width, height)`` tiles for the fixed engine (width <= 128);
-  every tiling gives the same bytes.
-- ``variant``: the image: ``"dc"`` = [|v_d|, |v_c|, f] (default), ``"dc0"``
-  = [|v_d|, 0, f], ``"cd"`` = [|v_c|, |v_d|, f], ``"hsv"`` = colour wheel of
-  v_R; ``hsv_max``: its radius in pixels (default: each frame's longest
-  vector).
-"""
+"""Types of the compiled module `reynoldsflow._native`; the package's
+docstring (`reynoldsflow/__init__.py`) documents the options they share."""
 
 from os import PathLike
 from fractions import Fraction
