@@ -1,6 +1,8 @@
 //! The bounded-memory engine: one tile at a time, rows streaming down
-//! through a ring per stage, so working memory is `O(COLS)` and fixed at
-//! compile time.
+//! through a ring per stage, so working memory is `O(window columns)`:
+//! arrays fixed at compile time ([`Engine`]) or slices the caller sizes at
+//! run time ([`SliceEngine`]). A tile wider than the memory's window runs
+//! as several windows side by side.
 //!
 //! A tile of `w × h` output pixels is computed from a window of
 //! `n = w + 14` columns and `h + 14` rows of clamped input (SPEC §6). Pushing
@@ -12,7 +14,7 @@
 
 use fixed::types::{I16F16, U32F32};
 
-use crate::ring::RowRing;
+use crate::ring::{RowRing, take_rows};
 use crate::schedule::{
     D_DEPTH, E_DEPTH, E_LAG, E_RADIUS, E_START, HALO, OUTPUT_LAG, OUTPUT_START, P0_DEPTH,
     PRODUCT_LAG, PRODUCT_RADIUS, PRODUCT_START, SUM_DEPTH, SUM_RADIUS, V_DEPTH, V_LAG, V_RADIUS,
@@ -23,10 +25,9 @@ use crate::solve::{
     divergence_free_q16, solve,
 };
 use crate::stages::{
-    CHANNELS, Products, ResidualInputs, boundary_minus_domain, smooth, structure_row,
-    vertical_binomial,
+    CHANNELS, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
 };
-use crate::{Config, Job, Tile};
+use crate::{Config, Error, Job, Tile};
 
 /// Everything the representation knows about one pixel.
 ///
@@ -115,7 +116,7 @@ impl<A: Sink, B: Sink> Sink for (A, B) {
 pub(crate) struct Window {
     /// Frame column of window column 0 (`tile.x − 7`).
     pub x_first: isize,
-    /// Window columns (`tile.width + 14`), at most `COLS`.
+    /// Window columns (`tile.width + 14`), at most the memory's.
     pub n: usize,
     /// Frame row of window row 0 (`tile.y − 7`).
     pub y_first: isize,
@@ -123,26 +124,139 @@ pub(crate) struct Window {
     pub t: usize,
 }
 
-/// All working memory of the computation, for tiles up to `COLS − 14`
-/// columns wide: `316 · COLS` bytes and a few more ([`working_bytes`]).
-/// Each channel has its own plane of rows, so the row loops vectorise.
-/// `repr(C)`, widest fields first, so [`working_bytes`] can follow the layout.
-#[repr(C)]
-pub struct Engine<const COLS: usize> {
-    window: Window,
-    products: Products<COLS>,
-    sums: [RowRing<i32, COLS, SUM_DEPTH>; CHANNELS],
-    e: [RowRing<i32, COLS, E_DEPTH>; 2],
-    v: [RowRing<i32, COLS, V_DEPTH>; 2],
-    vert_e: [[i32; COLS]; 2],
-    out: [FlowPixel; COLS],
-    d: RowRing<i16, COLS, D_DEPTH>,
-    vert_d: [[i16; COLS]; 4],
-    p0: RowRing<u8, COLS, P0_DEPTH>,
+/// The rows a window of `cols` columns computes in, per [`Memory`] kind:
+/// 32-bit words, 16-bit halves, bytes and output pixels.
+const WORD_ROWS: usize = CHANNELS + CHANNELS * SUM_DEPTH + 2 * E_DEPTH + 2 * V_DEPTH + 2;
+const HALF_ROWS: usize = D_DEPTH + 4;
+const BYTE_ROWS: usize = P0_DEPTH;
+
+/// Where an engine's working memory lives: arrays of a compile-time width
+/// ([`Arrays`], for firmware and statics) or slices the caller owns, of a
+/// width chosen at run time ([`Slices`], for hosts). Sealed: the engine
+/// carves the memory into its rows itself.
+pub trait Memory: memory::Carve {}
+
+mod memory {
+    use super::FlowPixel;
+
+    /// The memory as four planes, and the window columns it holds.
+    pub trait Carve {
+        fn cols(&self) -> usize;
+        fn planes(&mut self) -> (&mut [i32], &mut [i16], &mut [u8], &mut [FlowPixel]);
+    }
 }
 
+/// Working memory for windows of up to `COLS` columns, as arrays:
+/// `316 · COLS` bytes and a few more ([`working_bytes`]). `repr(C)`, widest
+/// fields first, so [`working_bytes`] can follow the layout.
+#[repr(C)]
+pub struct Arrays<const COLS: usize> {
+    words: [[i32; COLS]; WORD_ROWS],
+    out: [FlowPixel; COLS],
+    halves: [[i16; COLS]; HALF_ROWS],
+    bytes: [[u8; COLS]; BYTE_ROWS],
+}
+
+impl<const COLS: usize> Memory for Arrays<COLS> {}
+
+impl<const COLS: usize> memory::Carve for Arrays<COLS> {
+    #[inline(always)]
+    fn cols(&self) -> usize {
+        COLS
+    }
+
+    #[inline(always)]
+    fn planes(&mut self) -> (&mut [i32], &mut [i16], &mut [u8], &mut [FlowPixel]) {
+        (
+            self.words.as_flattened_mut(),
+            self.halves.as_flattened_mut(),
+            self.bytes.as_flattened_mut(),
+            &mut self.out,
+        )
+    }
+}
+
+/// Working memory the caller owns, for windows of a width chosen at run
+/// time (a host's tile as wide as the frame): four slices, each at least
+/// its [`MemorySize`] for the window.
+pub struct Slices<'m> {
+    cols: usize,
+    words: &'m mut [i32],
+    halves: &'m mut [i16],
+    bytes: &'m mut [u8],
+    pixels: &'m mut [FlowPixel],
+}
+
+impl Memory for Slices<'_> {}
+
+impl memory::Carve for Slices<'_> {
+    #[inline(always)]
+    fn cols(&self) -> usize {
+        self.cols
+    }
+
+    #[inline(always)]
+    fn planes(&mut self) -> (&mut [i32], &mut [i16], &mut [u8], &mut [FlowPixel]) {
+        (
+            &mut *self.words,
+            &mut *self.halves,
+            &mut *self.bytes,
+            &mut *self.pixels,
+        )
+    }
+}
+
+/// Elements of each slice a [`SliceEngine`] needs for tiles up to a width.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemorySize {
+    /// `i32`s.
+    pub words: usize,
+    /// `i16`s.
+    pub halves: usize,
+    /// `u8`s.
+    pub bytes: usize,
+    /// [`FlowPixel`]s.
+    pub pixels: usize,
+}
+
+impl MemorySize {
+    /// For tiles up to `tile_width` columns (windows of `tile_width + 14`);
+    /// `None` if the sizes overflow `usize`.
+    pub const fn for_tile_width(tile_width: usize) -> Option<Self> {
+        let Some(cols) = tile_width.checked_add(2 * HALO) else {
+            return None;
+        };
+        match cols.checked_mul(WORD_ROWS) {
+            Some(words) => Some(Self {
+                words,
+                halves: cols * HALF_ROWS,
+                bytes: cols * BYTE_ROWS,
+                pixels: cols,
+            }),
+            None => None,
+        }
+    }
+}
+
+/// The engine: a tile at a time, rows streaming down through a ring per
+/// stage, in the working memory `M`. [`Engine`] keeps it in arrays of a
+/// compile-time width, [`SliceEngine`] in slices the caller owns.
+#[repr(C)]
+pub struct TileEngine<M> {
+    window: Window,
+    memory: M,
+}
+
+/// An engine whose working memory is arrays for windows of `COLS` columns
+/// (tiles up to `COLS − 14` wide): its size is known at compile time, so it
+/// can live in a `static` or on a firmware's stack.
+pub type Engine<const COLS: usize> = TileEngine<Arrays<COLS>>;
+
+/// An engine in memory the caller owns, of a width chosen at run time.
+pub type SliceEngine<'m> = TileEngine<Slices<'m>>;
+
 impl<const COLS: usize> Engine<COLS> {
-    /// The widest tile this engine computes.
+    /// The widest tile this engine computes in one window.
     pub const MAX_TILE_WIDTH: usize = {
         assert!(COLS > 2 * HALO, "an engine needs more than 14 columns");
         COLS - 2 * HALO
@@ -156,29 +270,115 @@ impl<const COLS: usize> Engine<COLS> {
     pub const fn new() -> Self {
         let _ = Self::MAX_TILE_WIDTH;
         Self {
-            p0: RowRing::new(0),
-            d: RowRing::new(0),
-            e: [RowRing::new(0), RowRing::new(0)],
-            v: [RowRing::new(0), RowRing::new(0)],
-            sums: [const { RowRing::new(0) }; CHANNELS],
-            vert_d: [[0; COLS]; 4],
-            vert_e: [[0; COLS]; 2],
-            products: Products {
-                rows: [[0; COLS]; CHANNELS],
-            },
-            out: [FlowPixel::ZERO; COLS],
             window: Window {
                 x_first: 0,
                 n: 0,
                 y_first: 0,
                 t: 0,
             },
+            memory: Arrays {
+                words: [[0; COLS]; WORD_ROWS],
+                out: [FlowPixel::ZERO; COLS],
+                halves: [[0; COLS]; HALF_ROWS],
+                bytes: [[0; COLS]; BYTE_ROWS],
+            },
         }
+    }
+}
+
+impl<const COLS: usize> Default for Engine<COLS> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<'m> SliceEngine<'m> {
+    /// An engine in the caller's slices (each at least its
+    /// [`MemorySize`]; longer is fine): tiles up to the widest window all
+    /// four hold, minus the 14-column halo. Fails with
+    /// [`Error::BufferTooShort`] (in `i32`s) when they hold no window wider
+    /// than the halo.
+    pub fn new(
+        words: &'m mut [i32],
+        halves: &'m mut [i16],
+        bytes: &'m mut [u8],
+        pixels: &'m mut [FlowPixel],
+    ) -> Result<Self, Error> {
+        let cols = (words.len() / WORD_ROWS)
+            .min(halves.len() / HALF_ROWS)
+            .min(bytes.len() / BYTE_ROWS)
+            .min(pixels.len());
+        if cols <= 2 * HALO {
+            return Err(Error::BufferTooShort {
+                needed: (2 * HALO + 1) * WORD_ROWS,
+                got: cols * WORD_ROWS,
+            });
+        }
+        Ok(Self {
+            window: Window::default(),
+            memory: Slices {
+                cols,
+                words,
+                halves,
+                bytes,
+                pixels,
+            },
+        })
+    }
+}
+
+/// The engine's rows, carved from its memory for one window width.
+struct Rows<'m> {
+    products: [&'m mut [i32]; CHANNELS],
+    sums: [RowRing<'m, i32, SUM_DEPTH>; CHANNELS],
+    e: [RowRing<'m, i32, E_DEPTH>; 2],
+    v: [RowRing<'m, i32, V_DEPTH>; 2],
+    vert_e: [&'m mut [i32]; 2],
+    out: &'m mut [FlowPixel],
+    d: RowRing<'m, i16, D_DEPTH>,
+    vert_d: [&'m mut [i16]; 4],
+    p0: RowRing<'m, u8, P0_DEPTH>,
+}
+
+impl<'m> Rows<'m> {
+    /// Rows of `cols` elements, in the order [`WORD_ROWS`] and its
+    /// neighbours count them.
+    #[inline(always)]
+    fn carve(
+        (mut words, mut halves, mut bytes, pixels): (
+            &'m mut [i32],
+            &'m mut [i16],
+            &'m mut [u8],
+            &'m mut [FlowPixel],
+        ),
+        cols: usize,
+    ) -> Self {
+        let words = &mut words;
+        let halves = &mut halves;
+        Self {
+            products: take_rows(words, cols),
+            sums: core::array::from_fn(|_| RowRing::carve(words, cols)),
+            e: core::array::from_fn(|_| RowRing::carve(words, cols)),
+            v: core::array::from_fn(|_| RowRing::carve(words, cols)),
+            vert_e: take_rows(words, cols),
+            out: pixels,
+            d: RowRing::carve(halves, cols),
+            vert_d: take_rows(halves, cols),
+            p0: RowRing::carve(&mut bytes, cols),
+        }
+    }
+}
+
+impl<M: Memory> TileEngine<M> {
+    /// The widest tile this engine computes in one window (wider tiles of a
+    /// plan run as several windows: same bytes, more halo).
+    pub fn max_tile_width(&self) -> usize {
+        self.memory.cols().saturating_sub(2 * HALO)
     }
 
     /// Compute every tile of the job into `sink`.
     #[inline(always)]
-    pub fn run<S: Sink>(&mut self, job: &Job<'_, COLS>, sink: &mut S) {
+    pub fn run<S: Sink>(&mut self, job: &Job<'_>, sink: &mut S) {
         for tile in job.plan().tiles() {
             self.tile(job, tile, sink);
         }
@@ -188,49 +388,51 @@ impl<const COLS: usize> Engine<COLS> {
     /// cores): the tile computed, or `None` (and nothing done) past the
     /// last tile.
     #[inline(always)]
-    pub fn run_tile<S: Sink>(
-        &mut self,
-        job: &Job<'_, COLS>,
-        index: usize,
-        sink: &mut S,
-    ) -> Option<Tile> {
+    pub fn run_tile<S: Sink>(&mut self, job: &Job<'_>, index: usize, sink: &mut S) -> Option<Tile> {
         let tile = job.plan().tile(index)?;
         self.tile(job, tile, sink);
         Some(tile)
     }
 
+    /// Tile `tile` as windows of at most [`max_tile_width`](Self::max_tile_width)
+    /// columns plus the halo, left to right.
     #[inline(always)]
-    fn tile<S: Sink>(&mut self, job: &Job<'_, COLS>, tile: Tile, sink: &mut S) {
-        let (config, frames) = (job.plan().config(), job.frames());
+    fn tile<S: Sink>(&mut self, job: &Job<'_>, tile: Tile, sink: &mut S) {
+        let (config, frames) = (job.config(), job.frames());
+        let step = self.max_tile_width().max(1);
         let y_first = tile.y as isize - HALO as isize;
-        self.begin(Window {
-            x_first: tile.x as isize - HALO as isize,
-            n: tile.width + 2 * HALO,
-            y_first,
-            t: 0,
-        });
-        for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
-            let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
-            self.push(config, prev, next, sink);
+        for x in (tile.x..tile.x + tile.width).step_by(step) {
+            self.begin(Window {
+                x_first: x as isize - HALO as isize,
+                n: step.min(tile.x + tile.width - x) + 2 * HALO,
+                y_first,
+                t: 0,
+            });
+            let mut pass = self.pass();
+            for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
+                let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
+                pass.push(config, prev, next, sink);
+            }
         }
     }
 
+    /// Start a window (at most the memory's columns wide).
     #[inline(always)]
     pub(crate) fn begin(&mut self, window: Window) {
+        let cols = self.memory.cols();
         debug_assert!(
-            window.n <= COLS,
-            "a window of {} columns in {COLS}",
+            window.n <= cols,
+            "a window of {} columns in {cols}",
             window.n
         );
         self.window = Window {
-            n: window.n.min(COLS),
+            n: window.n.min(cols),
             t: 0,
             ..window
         };
     }
 
-    /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
-    /// frame width) and run every stage it completes.
+    /// Feed the window's next row (see [`Pass::push`]).
     #[inline(always)]
     pub(crate) fn push<S: Sink>(
         &mut self,
@@ -239,32 +441,58 @@ impl<const COLS: usize> Engine<COLS> {
         next: &[u8],
         sink: &mut S,
     ) {
-        let Window { x_first, n, t, .. } = self.window;
+        self.pass().push(config, prev, next, sink);
+    }
+
+    /// The current window with the rows it computes in.
+    #[inline(always)]
+    fn pass(&mut self) -> Pass<'_> {
+        let cols = self.memory.cols();
+        Pass {
+            window: &mut self.window,
+            rows: Rows::carve(self.memory.planes(), cols),
+        }
+    }
+}
+
+/// One window in progress: where it lies, and its rows.
+struct Pass<'m> {
+    window: &'m mut Window,
+    rows: Rows<'m>,
+}
+
+impl Pass<'_> {
+    /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
+    /// frame width) and run every stage it completes.
+    #[inline(always)]
+    fn push<S: Sink>(&mut self, config: &Config, prev: &[u8], next: &[u8], sink: &mut S) {
+        let Window { x_first, n, t, .. } = *self.window;
         self.window.t += 1;
+        let rows = &mut self.rows;
         load_row(
             prev,
             next,
             x_first,
             n,
-            self.p0.row_mut(t),
-            self.d.row_mut(t),
+            rows.p0.row_mut(t),
+            rows.d.row_mut(t),
         );
         if t >= E_START {
-            let [ex, ey] = &mut self.e;
+            let [ex, ey] = &mut rows.e;
             boundary_minus_domain(
-                self.d.rows(t - 2 * E_RADIUS),
-                &mut self.vert_d,
+                rows.d.rows(t - 2 * E_RADIUS),
+                &mut rows.vert_d,
                 (ex.row_mut(t - E_LAG), ey.row_mut(t - E_LAG)),
                 n,
             );
         }
         if t >= V_START {
             let first = t - V_LAG - V_RADIUS;
-            let e = [self.e[0].rows(first), self.e[1].rows(first)];
-            let [vx, vy] = &mut self.v;
+            let e = [rows.e[0].rows(first), rows.e[1].rows(first)];
+            let [vx, vy] = &mut rows.v;
             smooth(
                 e,
-                &mut self.vert_e,
+                &mut rows.vert_e,
                 (vx.row_mut(t - V_LAG), vy.row_mut(t - V_LAG)),
                 n,
             );
@@ -272,15 +500,15 @@ impl<const COLS: usize> Engine<COLS> {
         if t >= PRODUCT_START {
             let j = t - PRODUCT_LAG;
             let input = ResidualInputs {
-                vx: self.v[0].row(j),
-                vy: self.v[1].rows(j - PRODUCT_RADIUS),
-                p0: self.p0.rows(j - PRODUCT_RADIUS),
-                d: self.d.row(j),
+                vx: rows.v[0].row(j),
+                vy: rows.v[1].rows(j - PRODUCT_RADIUS),
+                p0: rows.p0.rows(j - PRODUCT_RADIUS),
+                d: rows.d.row(j),
                 kappa: config.kappa_split(),
                 shift: config.dn_shift,
             };
-            let sums = self.sums.each_mut().map(|ring| ring.row_mut(j));
-            structure_row(&input, &mut self.products, sums, n);
+            let sums = rows.sums.each_mut().map(|ring| ring.row_mut(j));
+            structure_row(&input, &mut rows.products, sums, n);
         }
         if t >= OUTPUT_START {
             self.emit(config, t - OUTPUT_LAG, sink);
@@ -296,26 +524,47 @@ impl<const COLS: usize> Engine<COLS> {
             n,
             y_first,
             ..
-        } = self.window;
+        } = *self.window;
+        let rows = &mut self.rows;
         // The vertical G of the seven sums, into the product rows (free now).
-        for (ring, out) in self.sums.iter().zip(self.products.rows.iter_mut()) {
+        for (ring, out) in rows.sums.iter().zip(rows.products.iter_mut()) {
             vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
         }
         let fields = sink.reads_fields();
-        let [a, b, c, ph, pl, qh, ql] = &self.products.rows;
-        let (vx, vy, luma) = (self.v[0].row(o), self.v[1].row(o), self.p0.row(o));
+        let [a, b, c, ph, pl, qh, ql] = rows.products.each_ref().map(|row| &row[..]);
+        let (vx, vy, luma) = (rows.v[0].row(o), rows.v[1].row(o), rows.p0.row(o));
         let width = n.saturating_sub(2 * HALO);
-        let cols = (HALO..(HALO + width).min(COLS)).zip(self.out.iter_mut());
-        for (i, out) in cols {
-            let sums = StructureSums {
-                a: a[i],
-                b: b[i],
-                c: c[i],
-                p: [ph[i], pl[i]],
-                q: [qh[i], ql[i]],
-            };
-            let solved = solve(config, sums);
-            let v = [vx[i], vy[i]];
+        let columns = HALO..HALO + width;
+        let sums = a
+            .get(columns.clone())
+            .unwrap_or(&[])
+            .iter()
+            .zip(b.get(columns.clone()).unwrap_or(&[]))
+            .zip(c.get(columns.clone()).unwrap_or(&[]))
+            .zip(ph.get(columns.clone()).unwrap_or(&[]))
+            .zip(pl.get(columns.clone()).unwrap_or(&[]))
+            .zip(qh.get(columns.clone()).unwrap_or(&[]))
+            .zip(ql.get(columns.clone()).unwrap_or(&[]));
+        let pixels = vx
+            .get(columns.clone())
+            .unwrap_or(&[])
+            .iter()
+            .zip(vy.get(columns.clone()).unwrap_or(&[]))
+            .zip(luma.get(columns).unwrap_or(&[]));
+        for (out, (((((((&a, &b), &c), &ph), &pl), &qh), &ql), ((&vx, &vy), &luma))) in
+            rows.out.iter_mut().zip(sums.zip(pixels))
+        {
+            let solved = solve(
+                config,
+                StructureSums {
+                    a,
+                    b,
+                    c,
+                    p: [ph, pl],
+                    q: [qh, ql],
+                },
+            );
+            let v = [vx, vy];
             let (v_c, v_d) = if fields {
                 (
                     v.map(|v| curl_free_q16(config, v)),
@@ -329,14 +578,14 @@ impl<const COLS: usize> Engine<COLS> {
                 v_d: v_d.map(I16F16::from_bits),
                 m_c: U32F32::from_bits(curl_free_magnitude_q32(config, v)),
                 m_d: U32F32::from_bits(divergence_free_magnitude_q32(config, &solved)),
-                luma: luma[i],
+                luma,
             };
         }
         let (y, x) = (
             (y_first + o as isize) as usize,
             (x_first + HALO as isize) as usize,
         );
-        sink.row(y, x, self.out.get(..width).unwrap_or(&[]));
+        sink.row(y, x, rows.out.get(..width).unwrap_or(&[]));
     }
 }
 
@@ -344,14 +593,7 @@ impl<const COLS: usize> Engine<COLS> {
 /// frame (SPEC §2), as `p0` and `d = p1 − p0`.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-fn load_row<const COLS: usize>(
-    prev: &[u8],
-    next: &[u8],
-    x_first: isize,
-    n: usize,
-    p0: &mut [u8; COLS],
-    d: &mut [i16; COLS],
-) {
+fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d: &mut [i16]) {
     let width = prev.len().min(next.len());
     let (Some(&first), Some(&last)) = (prev.first(), prev.get(width.wrapping_sub(1))) else {
         return;
@@ -360,7 +602,7 @@ fn load_row<const COLS: usize>(
         next.first().copied().unwrap_or(0),
         next.get(width - 1).copied().unwrap_or(0),
     );
-    let n = n.min(COLS);
+    let n = n.min(p0.len()).min(d.len());
     // Columns left of the frame, inside it, and right of it.
     let left = (-x_first).min(n as isize).max(0) as usize;
     let start = x_first.max(0) as usize;
@@ -401,19 +643,13 @@ pub const fn working_bytes(cols: usize) -> usize {
     const fn field(offset: usize, size: usize, align: usize) -> usize {
         offset.next_multiple_of(align) + size
     }
-    let words = CHANNELS + CHANNELS * SUM_DEPTH + 2 * E_DEPTH + 2 * V_DEPTH + 2;
+    // The window, then the arrays (aligned like a pixel, as the window is).
     let mut end = size_of::<Window>();
-    end = field(end, words * 4 * cols, 4);
+    end = field(end, WORD_ROWS * 4 * cols, 4);
     end = field(end, size_of::<FlowPixel>() * cols, align_of::<FlowPixel>());
-    end = field(end, (D_DEPTH + 4) * 2 * cols, 2);
-    end = field(end, P0_DEPTH * cols, 1);
+    end = field(end, HALF_ROWS * 2 * cols, 2);
+    end = field(end, BYTE_ROWS * cols, 1);
     end.next_multiple_of(align_of::<Window>())
-}
-
-impl<const COLS: usize> Default for Engine<COLS> {
-    fn default() -> Self {
-        Self::new()
-    }
 }
 
 #[cfg(test)]

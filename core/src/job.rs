@@ -5,14 +5,14 @@ use crate::{Config, Error, FramePair, Plan};
 /// A [`Plan`] and a [`FramePair`] of the plan's size, checked once: running
 /// a job cannot fail ([`Engine::run`](crate::Engine::run)).
 #[derive(Clone, Copy, Debug)]
-pub struct Job<'a, const COLS: usize> {
-    plan: &'a Plan<COLS>,
+pub struct Job<'a> {
+    plan: &'a Plan,
     frames: FramePair<'a>,
 }
 
-impl<'a, const COLS: usize> Job<'a, COLS> {
+impl<'a> Job<'a> {
     /// Bind `frames` to `plan`; they must be of the plan's size.
-    pub fn new(plan: &'a Plan<COLS>, frames: FramePair<'a>) -> Result<Self, Error> {
+    pub fn new(plan: &'a Plan, frames: FramePair<'a>) -> Result<Self, Error> {
         let size = (plan.config().width(), plan.config().height());
         let (prev, next) = (frames.prev(), frames.next());
         if (prev.width(), prev.height()) != size || (next.width(), next.height()) != size {
@@ -22,7 +22,7 @@ impl<'a, const COLS: usize> Job<'a, COLS> {
     }
 
     /// The plan.
-    pub const fn plan(&self) -> &'a Plan<COLS> {
+    pub const fn plan(&self) -> &'a Plan {
         self.plan
     }
 
@@ -37,9 +37,9 @@ impl<'a, const COLS: usize> Job<'a, COLS> {
     }
 }
 
-impl<const COLS: usize> Plan<COLS> {
+impl Plan {
     /// Bind frames of this plan's size to it ([`Job::new`]).
-    pub fn bind<'a>(&'a self, frames: FramePair<'a>) -> Result<Job<'a, COLS>, Error> {
+    pub fn bind<'a>(&'a self, frames: FramePair<'a>) -> Result<Job<'a>, Error> {
         Job::new(self, frames)
     }
 }

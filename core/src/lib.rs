@@ -4,7 +4,7 @@
 //! representation `[|v_d|, |v_c|, fⁿ]`, as the project's SPEC defines them.
 //!
 //! ```
-//! use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling, represent};
+//! use reynoldsflow_core::{Config, FramePair, Params, Plan, Scaling, represent};
 //! # fn main() -> Result<(), reynoldsflow_core::Error> {
 //! let (w, h) = (32, 24);
 //! let prev: Vec<u8> = (0..w * h).map(|i| (i * 7 % 251) as u8).collect();
@@ -12,12 +12,12 @@
 //!
 //! // Validate once: sizes and parameters, the tiling, the frames.
 //! let config = Config::new(w, h, Params::DEFAULT)?;
-//! let plan = Plan::strips(config)?; // tiles as wide as the engine allows
+//! type Engine = reynoldsflow_core::Engine<78>; // windows of 78 columns, about 25 KiB
+//! let plan = Plan::strips(config, Engine::MAX_TILE_WIDTH)?; // tiles as wide as it takes
 //! let job = plan.bind(FramePair::packed(&config, &prev, &next)?)?;
 //!
-//! // Then compute: all working memory is the engine (here 78 columns,
-//! // tiles up to 64 wide, about 25 KiB), and running cannot fail.
-//! let mut engine = Engine::<78>::new();
+//! // Then compute: all working memory is the engine, and running cannot fail.
+//! let mut engine = Engine::new();
 //! let mut rgb = vec![0u8; w * h * 3];
 //! represent(&mut engine, &job, Scaling::PerFrameMinMax, &mut rgb, ())?;
 //! # Ok(()) }
@@ -26,9 +26,11 @@
 //! # How it computes
 //!
 //! The computation is integer-only and deterministic: every target gives the
-//! same bytes. All working memory lives in one [`Engine`] whose size is a
-//! const generic (`COLS` window columns, about 316 bytes each), and frames
-//! are cut into tiles of at most `COLS − 14` columns; every tiling gives the
+//! same bytes. All working memory lives in one engine: an [`Engine`] whose
+//! size is a const generic (`COLS` window columns, about 316 bytes each), or
+//! a [`SliceEngine`] in slices the caller sizes at run time ([`MemorySize`]).
+//! Frames are cut into tiles ([`Plan`]); a tile wider than the engine's
+//! `COLS − 14` columns runs as several windows, and every tiling gives the
 //! same bytes. Sizes and parameters are checked once ([`Config`], [`Plan`],
 //! [`FramePair`], [`Job`], the sinks); after that nothing fails or panics.
 //! Other output goes through a [`Sink`], which sees each output row as
@@ -38,7 +40,8 @@
 //! # Stability
 //!
 //! The stable surface is what the example uses and what a firmware or
-//! binding needs beside it: [`Engine`], [`Plan`], [`Job`], [`FramePair`],
+//! binding needs beside it: [`Engine`] and [`SliceEngine`] (with
+//! [`MemorySize`]), [`Plan`], [`Job`], [`FramePair`],
 //! [`Config`] and [`Params`], [`Sink`] and [`FlowPixel`], [`Error`] (the one
 //! error type), and the scaling ([`Scaling`], [`ByteScale`], [`represent`]).
 //! Changes to them follow semantic versioning; the bytes they produce change
@@ -67,7 +70,10 @@ mod solve;
 mod stages;
 mod stream;
 
-pub use engine::{Engine, FlowPixel, Sink, working_bytes};
+pub use engine::{
+    Arrays, Engine, FlowPixel, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine,
+    working_bytes,
+};
 pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};

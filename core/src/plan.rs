@@ -18,12 +18,15 @@ pub struct Tile {
     pub height: usize,
 }
 
-/// A validated tiling of a frame for an [`Engine<COLS>`](crate::Engine): tiles
-/// of `tile_width × tile_height` in row-major order, the last ones in each
-/// row and column cut at the frame's edge. Any tiling gives the same bytes.
+/// A validated tiling of a frame: tiles of `tile_width × tile_height` in
+/// row-major order, the last ones in each row and column cut at the frame's
+/// edge. Any tiling gives the same bytes, on any engine: a tile wider than
+/// an engine's window runs as several windows (more halo, same bytes), so
+/// choose tiles no wider than [`TileEngine::max_tile_width`](crate::TileEngine::max_tile_width)
+/// to compute each once.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Plan<const COLS: usize> {
+pub struct Plan {
     config: Config,
     // Non-zero by construction, so tile arithmetic has no division-by-zero
     // path for the compiler to keep.
@@ -33,18 +36,13 @@ pub struct Plan<const COLS: usize> {
     down: NonZeroUsize,
 }
 
-impl<const COLS: usize> Plan<COLS> {
+impl Plan {
     /// Tiles of `tile_width × tile_height` (each at least 1; larger than the
-    /// frame means the whole frame). The width must fit the engine:
-    /// `tile_width ≤ COLS − 14`, unless the frame itself is narrower.
+    /// frame means the whole frame).
     pub fn new(config: Config, tile_width: usize, tile_height: usize) -> Result<Self, Error> {
-        let max = COLS.saturating_sub(2 * HALO);
         let (w, h) = (config.width(), config.height());
         let tile_width = NonZeroUsize::new(tile_width.min(w)).ok_or(Error::TileOutOfFrame)?;
         let tile_height = NonZeroUsize::new(tile_height.min(h)).ok_or(Error::TileOutOfFrame)?;
-        if tile_width.get() > max {
-            return Err(Error::TileTooWide { max });
-        }
         let across = NonZeroUsize::new(w.div_ceil(tile_width.get())).ok_or(Error::EmptyFrame)?;
         let down = NonZeroUsize::new(h.div_ceil(tile_height.get())).ok_or(Error::EmptyFrame)?;
         Ok(Self {
@@ -56,9 +54,11 @@ impl<const COLS: usize> Plan<COLS> {
         })
     }
 
-    /// The widest strips this engine allows, each the full frame height.
-    pub fn strips(config: Config) -> Result<Self, Error> {
-        Self::new(config, COLS.saturating_sub(2 * HALO), config.height())
+    /// Strips of `width` columns (e.g. an engine's
+    /// [`MAX_TILE_WIDTH`](crate::Engine::MAX_TILE_WIDTH)), each the full
+    /// frame height.
+    pub fn strips(config: Config, width: usize) -> Result<Self, Error> {
+        Self::new(config, width, config.height())
     }
 
     /// The configuration this plan tiles.
@@ -149,8 +149,7 @@ mod tests {
             (1, 1, 1, 1),
             (100, 7, 100, 7),
         ] {
-            let plan =
-                Plan::<214>::new(Config::new(w, h, Params::DEFAULT).unwrap(), tw, th).unwrap();
+            let plan = Plan::new(Config::new(w, h, Params::DEFAULT).unwrap(), tw, th).unwrap();
             let by_tile: u64 = plan
                 .tiles()
                 .map(|t| ((t.width + 14) * (t.height + 14)) as u64)

@@ -1,14 +1,14 @@
 //! Whole-frame convenience: the representation in either scaling mode.
 
 use crate::sink::check_len;
-use crate::{ByteScale, Engine, Error, ExtremesSink, Job, RgbSink, Scaling, Sink};
+use crate::{ByteScale, Error, ExtremesSink, Job, Memory, RgbSink, Scaling, Sink, TileEngine};
 
 /// The byte scales of both channels for a `Scaling`, running the engine
 /// once over the job first when the mode needs the frame's extremes.
 #[inline(always)]
-pub fn byte_scales<const COLS: usize>(
-    engine: &mut Engine<COLS>,
-    job: &Job<'_, COLS>,
+pub fn byte_scales<M: Memory>(
+    engine: &mut TileEngine<M>,
+    job: &Job<'_>,
     scaling: Scaling,
 ) -> (ByteScale, ByteScale) {
     let extremes = || {
@@ -27,9 +27,9 @@ pub fn byte_scales<const COLS: usize>(
 /// (use `()` for nothing). `PerFrameMinMax` runs the engine twice, `Fixed`
 /// once. Fails, before computing anything, only when `rgb` is too short.
 #[inline(always)]
-pub fn represent<const COLS: usize, S: Sink>(
-    engine: &mut Engine<COLS>,
-    job: &Job<'_, COLS>,
+pub fn represent<M: Memory, S: Sink>(
+    engine: &mut TileEngine<M>,
+    job: &Job<'_>,
     scaling: Scaling,
     rgb: &mut [u8],
     also: S,

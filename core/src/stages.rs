@@ -42,11 +42,11 @@ fn binomial<T: Copy + Add<Output = T> + Shl<u32, Output = T>>(a: T, b: T, c: T, 
     (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
 }
 
-/// Columns `[r, n − r)` of a window of `n` columns, cut to `[r, COLS − r)`
-/// so that every `i ± r` indexes a `COLS`-long row.
+/// Columns `[r, n − r)` of a window of `n` columns. Rows are at least `n`
+/// long (the engine carves them so); a shorter one reads as empty.
 #[inline(always)]
-fn span<const COLS: usize>(n: usize, r: usize) -> core::ops::Range<usize> {
-    r..n.min(COLS).saturating_sub(r)
+fn span(n: usize, r: usize) -> core::ops::Range<usize> {
+    r..n.saturating_sub(r)
 }
 
 /// The row shifted by `−r … +r` around columns `cols` (`K = 2r + 1`
@@ -106,15 +106,11 @@ fn columns<T>(row: &mut [T], cols: core::ops::Range<usize>) -> &mut [T] {
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn vertical_binomial<T, const COLS: usize>(
-    rows: [&[T; COLS]; 5],
-    out: &mut [T; COLS],
-    n: usize,
-    r: usize,
-) where
+pub fn vertical_binomial<T>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize)
+where
     T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
 {
-    let cols = span::<COLS>(n, r);
+    let cols = span(n, r);
     let [a, b, c, d, e] = rows.map(|row| points(row, cols.clone()));
     let taps = a.zip(b).zip(c).zip(d).zip(e);
     for (o, ((((&a, &b), &c), &d), &e)) in columns(out, cols).iter_mut().zip(taps) {
@@ -124,15 +120,11 @@ pub fn vertical_binomial<T, const COLS: usize>(
 
 /// The horizontal binomial of a row valid on `[r − 2, n − r + 2)`, on `[r, n − r)`.
 #[inline(always)]
-fn horizontal_binomial<T, const COLS: usize>(
-    row: &[T; COLS],
-    out: &mut [T; COLS],
-    n: usize,
-    r: usize,
-) where
+fn horizontal_binomial<T>(row: &[T], out: &mut [T], n: usize, r: usize)
+where
     T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
 {
-    let cols = span::<COLS>(n, r.max(2));
+    let cols = span(n, r.max(2));
     let taps = neighbourhoods5(row, cols.clone());
     for (o, [a, b, c, d, e]) in columns(out, cols).iter_mut().zip(taps) {
         *o = binomial(a, b, c, d, e);
@@ -140,7 +132,7 @@ fn horizontal_binomial<T, const COLS: usize>(
 }
 
 /// Rows of one channel pair (x, y).
-pub type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T; COLS]);
+pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 
 /// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it.
 ///
@@ -151,13 +143,13 @@ pub type Pair<'a, T, const COLS: usize> = (&'a mut [T; COLS], &'a mut [T; COLS])
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn boundary_minus_domain<const COLS: usize>(
-    d: [&[i16; COLS]; 5],
-    vert: &mut [[i16; COLS]; 4],
-    e: Pair<'_, i32, COLS>,
+pub fn boundary_minus_domain(
+    d: [&[i16]; 5],
+    vert: &mut [&mut [i16]; 4],
+    e: Pair<'_, i32>,
     n: usize,
 ) {
-    let cols = span::<COLS>(n, 0);
+    let cols = span(n, 0);
     let [d0, d1, d2, d3, d4] = d.map(|row| points(row, cols.clone()));
     let taps = d0.zip(d1).zip(d2).zip(d3).zip(d4);
     let [v1, v2, v3, v4] = vert;
@@ -173,7 +165,7 @@ pub fn boundary_minus_domain<const COLS: usize>(
         *v4 = (dd + ee) - (a + b);
     }
     let (ex, ey) = e;
-    let cols = span::<COLS>(n, 2);
+    let cols = span(n, 2);
     let taps = |v| neighbourhoods5(v, cols.clone()).map(|w| w.map(i32::from));
     let parts = taps(v1).zip(taps(v2)).zip(taps(v3)).zip(taps(v4));
     let outs = columns(ex, cols.clone())
@@ -193,12 +185,7 @@ pub fn boundary_minus_domain<const COLS: usize>(
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five `E` rows centred on it.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn smooth<const COLS: usize>(
-    e: [[&[i32; COLS]; 5]; 2],
-    vert: &mut [[i32; COLS]; 2],
-    v: Pair<'_, i32, COLS>,
-    n: usize,
-) {
+pub fn smooth(e: [[&[i32]; 5]; 2], vert: &mut [&mut [i32]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e;
     let [tx, ty] = vert;
     vertical_binomial(ex, tx, n, 2);
@@ -218,22 +205,22 @@ const V_MAX: i32 = 26_880 * 255;
 
 /// The rows one residual row reads: `V` above, at and below it, `p0` likewise,
 /// and `d` at it.
-pub struct ResidualInputs<'a, const COLS: usize> {
+pub struct ResidualInputs<'a> {
     /// `V` x at the row.
-    pub vx: &'a [i32; COLS],
+    pub vx: &'a [i32],
     /// `V` y above, at and below the row.
-    pub vy: [&'a [i32; COLS]; 3],
+    pub vy: [&'a [i32]; 3],
     /// `p0` above, at and below the row.
-    pub p0: [&'a [u8; COLS]; 3],
+    pub p0: [&'a [u8]; 3],
     /// `d = p1 − p0` at the row.
-    pub d: &'a [i16; COLS],
+    pub d: &'a [i16],
     /// `κ = 6144 / s` (see `params`) as `κh·2^σ + κl`: `[κh, κl]`.
     pub kappa: [i32; 2],
     /// `σ`: the residual is summed as `round(Dn / 2^σ)` (see `params`).
     pub shift: u32,
 }
 
-/// The seven structure channels, in the order of [`Products::rows`] and the
+/// The seven structure channels, in the order of the product rows and the
 /// engine's sum rings: `X², XY, Y², X·h, X·l, Y·h, Y·l`.
 pub const CHANNELS: usize = 7;
 
@@ -264,21 +251,14 @@ pub fn rounded_residual(
     dn
 }
 
-/// Scratch rows of the seven structure products.
-#[repr(transparent)]
-pub struct Products<const COLS: usize> {
-    /// One row per channel ([`CHANNELS`]).
-    pub rows: [[i32; COLS]; CHANNELS],
-}
-
 /// The seven products on `[5, n−5)`, then their horizontal `G` on
 /// `[7, n−7)` into one row of each sum ring.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn structure_row<const COLS: usize>(
-    input: &ResidualInputs<'_, COLS>,
-    products: &mut Products<COLS>,
-    sums: [&mut [i32; COLS]; CHANNELS],
+pub fn structure_row(
+    input: &ResidualInputs<'_>,
+    products: &mut [&mut [i32]; CHANNELS],
+    sums: [&mut [i32]; CHANNELS],
     n: usize,
 ) {
     let ResidualInputs {
@@ -289,8 +269,8 @@ pub fn structure_row<const COLS: usize>(
         kappa,
         shift,
     } = *input;
-    let [xx, xy, yy, xh, xl, yh, yl] = &mut products.rows;
-    let cols = span::<COLS>(n, 5);
+    let [xx, xy, yy, xh, xl, yh, yl] = products;
+    let cols = span(n, 5);
     let point = |row| points::<i32>(row, cols.clone());
     let three = |row| neighbourhoods3(row, cols.clone()).map(|w| w.map(i32::from));
     let inputs = neighbourhoods3(vx, cols.clone())
@@ -325,7 +305,7 @@ pub fn structure_row<const COLS: usize>(
         *yh = y * h;
         *yl = y * l;
     }
-    for (row, sum) in products.rows.iter().zip(sums) {
+    for (row, sum) in products.iter().zip(sums) {
         horizontal_binomial(row, sum, n, 7);
     }
 }

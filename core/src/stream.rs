@@ -2,7 +2,7 @@
 //! rows it depends on are in.
 
 use crate::engine::Window;
-use crate::{Config, Engine, Error, HALO, Sink};
+use crate::{Config, Error, HALO, Memory, Sink, TileEngine};
 
 /// One column strip of a frame fed row by row: frame row `y` of `fⁿ` and
 /// `fⁿ⁺¹` goes in, and output row `y − 7` comes out (the bottom rows when
@@ -11,16 +11,16 @@ use crate::{Config, Engine, Error, HALO, Sink};
 /// (one engine each) that every row is pushed to.
 ///
 /// With a stored previous frame, push its row `y` beside each new row.
-pub struct RowStream<'e, const COLS: usize> {
-    engine: &'e mut Engine<COLS>,
+pub struct RowStream<'e, M: Memory> {
+    engine: &'e mut TileEngine<M>,
     config: Config,
     rows_in: usize,
 }
 
-impl<'e, const COLS: usize> RowStream<'e, COLS> {
+impl<'e, M: Memory> RowStream<'e, M> {
     /// Stream the strip `[x, x + width)` of frames of `config`'s size.
     pub fn new(
-        engine: &'e mut Engine<COLS>,
+        engine: &'e mut TileEngine<M>,
         config: Config,
         x: usize,
         width: usize,
@@ -28,10 +28,9 @@ impl<'e, const COLS: usize> RowStream<'e, COLS> {
         if width == 0 || x.checked_add(width).is_none_or(|end| end > config.width()) {
             return Err(Error::TileOutOfFrame);
         }
-        if width > Engine::<COLS>::MAX_TILE_WIDTH {
-            return Err(Error::TileTooWide {
-                max: Engine::<COLS>::MAX_TILE_WIDTH,
-            });
+        let max = engine.max_tile_width();
+        if width > max {
+            return Err(Error::TileTooWide { max });
         }
         engine.begin(Window {
             x_first: x as isize - HALO as isize,
@@ -47,7 +46,7 @@ impl<'e, const COLS: usize> RowStream<'e, COLS> {
     }
 
     /// Stream the whole frame width as one strip.
-    pub fn full_width(engine: &'e mut Engine<COLS>, config: Config) -> Result<Self, Error> {
+    pub fn full_width(engine: &'e mut TileEngine<M>, config: Config) -> Result<Self, Error> {
         Self::new(engine, config, 0, config.width())
     }
 

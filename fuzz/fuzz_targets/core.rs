@@ -10,8 +10,8 @@ use arbitrary::Arbitrary;
 use fixed::types::{U16F16, U32F32};
 use libfuzzer_sys::fuzz_target;
 use reynoldsflow_core::{
-    Config, Engine, Error, ExtremesSink, FramePair, IntensityScale, Params, Plan, RgbSink,
-    RowStream, Scaling, represent,
+    Arrays, Config, Engine, Error, ExtremesSink, FlowPixel, FramePair, IntensityScale,
+    MemorySize, Params, Plan, RgbSink, RowStream, Scaling, SliceEngine, represent,
 };
 
 /// Tiles up to 80 columns: the README's 640×480-in-32-KiB engine.
@@ -103,14 +103,15 @@ fuzz_target!(|case: Case| {
     let mut engine = Box::new(Engine::<COLS>::new());
 
     // The reference: whole-frame strips.
-    let strips = Plan::<COLS>::strips(config).expect("strips fit the engine");
+    let strips = Plan::strips(config, Engine::<COLS>::MAX_TILE_WIDTH).expect("non-empty strips");
     let mut whole = vec![0u8; 3 * w * h];
     let job = strips.bind(frames).expect("frames of the plan's size");
     represent(&mut *engine, &job, scaling, &mut whole, ()).expect("checked inputs");
 
-    // Any accepted tiling gives the same bytes.
+    // Any accepted tiling gives the same bytes, on the array engine (a tile
+    // wider than its window runs as several) and in slices sized to the tile.
     let (tw, th) = (usize::from(case.tile.0), usize::from(case.tile.1));
-    match Plan::<COLS>::new(config, tw, th) {
+    match Plan::new(config, tw, th) {
         Ok(plan) => {
             let mut tiled = vec![0u8; 3 * w * h];
             let job = plan.bind(frames).expect("frames of the plan's size");
@@ -119,9 +120,16 @@ fuzz_target!(|case: Case| {
                 tiled == whole,
                 "tiles {tw}x{th} of {w}x{h} differ from strips"
             );
+            let size = MemorySize::for_tile_width(plan.tile_width()).expect("small sizes");
+            let (mut words, mut halves) = (vec![0; size.words], vec![0; size.halves]);
+            let (mut bytes, mut pixels) = (vec![0; size.bytes], vec![FlowPixel::default(); size.pixels]);
+            let mut sliced = SliceEngine::new(&mut words, &mut halves, &mut bytes, &mut pixels)
+                .expect("memory of its size");
+            assert_eq!(sliced.max_tile_width(), plan.tile_width());
+            represent(&mut sliced, &job, scaling, &mut tiled, ()).expect("checked");
+            assert!(tiled == whole, "tiles {tw}x{th} of {w}x{h} in slices differ");
         }
         Err(Error::TileOutOfFrame) => assert!(tw == 0 || th == 0),
-        Err(Error::TileTooWide { max }) => assert!(tw.min(w) > max),
         Err(e) => panic!("unexpected plan error {e:?}"),
     }
 
@@ -144,7 +152,7 @@ fuzz_target!(|case: Case| {
         row.resize(w + slack(y), 0xa5);
         row
     };
-    let mut stream_pass = |sink: &mut dyn FnMut(&mut RowStream<'_, COLS>, &[u8], &[u8])| {
+    let mut stream_pass = |sink: &mut dyn FnMut(&mut RowStream<'_, Arrays<COLS>>, &[u8], &[u8])| {
         let (mut x, mut i) = (0, 0);
         while x < w {
             let sw = widths[i % widths.len()].min(w - x);
@@ -176,7 +184,7 @@ fuzz_target!(|case: Case| {
     let (scale_d, scale_c) = scaling
         .byte_scales(|| {
             let mut extremes = ExtremesSink::default();
-            stream_pass(&mut |s: &mut RowStream<'_, COLS>, p: &[u8], n: &[u8]| {
+            stream_pass(&mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
                 s.push(p, n, &mut extremes).expect("whole rows")
             });
             Ok::<_, Error>(extremes)
@@ -184,7 +192,7 @@ fuzz_target!(|case: Case| {
         .expect("infallible");
     let mut streamed = vec![0u8; 3 * w * h];
     let mut sink = RgbSink::new(&config, &mut streamed, scale_d, scale_c).expect("plane size");
-    stream_pass(&mut |s: &mut RowStream<'_, COLS>, p: &[u8], n: &[u8]| {
+    stream_pass(&mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
         s.push(p, n, &mut sink).expect("whole rows")
     });
     assert!(

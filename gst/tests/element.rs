@@ -386,12 +386,12 @@ fn core_regions(
         )
         .unwrap(),
     );
-    let mut engine = fixed_engine::boxed_engine();
-    let plan = Plan::strips(config).unwrap();
+    let mut memory = fixed_engine::HostEngine::new();
+    let plan = Plan::strips(config, fixed_engine::STRIP_WIDTH).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, prev, next).unwrap())
         .unwrap();
-    engine.run(&job, &mut *sink);
+    memory.engine(&plan).unwrap().run(&job, &mut *sink);
     sink.end_frame().to_vec()
 }
 

@@ -20,11 +20,13 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{Config, FlowPixel, FramePair, Job, Params, Scaling, Sink, represent};
+use reynoldsflow_core::{
+    Config, FlowPixel, FramePair, Job, Params, Plan, Scaling, Sink, SliceEngine, represent,
+};
 
 mod common;
 use common::{SIZES, moving_pair};
-use reynoldsflow_host::fixed_engine::{ENGINE_COLS, HostEngine, HostPlan, boxed_engine};
+use reynoldsflow_host::fixed_engine::{HostEngine, STRIP_WIDTH};
 
 const FIXED: Scaling = Scaling::Fixed {
     k_d: U16F16::lit("8"),
@@ -34,7 +36,7 @@ const FIXED: Scaling = Scaling::Fixed {
 /// The whole engine over the frame: `represent`, `Fixed` gains (one pass),
 /// strips of the host engine.
 #[inline(never)]
-fn engine_pass(engine: &mut HostEngine, job: &Job<'_, ENGINE_COLS>, rgb: &mut [u8]) {
+fn engine_pass(engine: &mut SliceEngine<'_>, job: &Job<'_>, rgb: &mut [u8]) {
     represent(engine, job, FIXED, rgb, ()).unwrap();
 }
 
@@ -69,11 +71,12 @@ fn digests() {
     for (w, h) in SIZES {
         let (prev, next) = moving_pair(w, h);
         let config = Config::new(w, h, Params::DEFAULT).unwrap();
-        let plan = HostPlan::strips(config).unwrap();
+        let plan = Plan::strips(config, STRIP_WIDTH).unwrap();
         let job = plan
             .bind(FramePair::packed(&config, &prev, &next).unwrap())
             .unwrap();
-        let mut engine = boxed_engine();
+        let mut memory = HostEngine::new();
+        let mut engine = memory.engine(&plan).unwrap();
         let mut pixels = Digest(0xcbf2_9ce4_8422_2325);
         let mut rgb = vec![0u8; 3 * w * h];
         let scaling = Scaling::PerFrameMinMax;
@@ -110,11 +113,12 @@ fn main() {
     }
     let (prev, next) = moving_pair(w, h);
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let plan = HostPlan::strips(config).unwrap();
+    let plan = Plan::strips(config, STRIP_WIDTH).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, &prev, &next).unwrap())
         .unwrap();
-    let mut engine = boxed_engine();
+    let mut memory = HostEngine::new();
+    let mut engine = memory.engine(&plan).unwrap();
     let mut rgb = vec![0u8; 3 * w * h];
     if !timing {
         for _ in 0..reps {

@@ -7,7 +7,7 @@
 
 use multiversion::multiversion;
 use multiversion::target::target_cfg_f;
-use reynoldsflow_core::{Engine, Error, FramePair, Plan, Scaling, Sink};
+use reynoldsflow_core::{Error, FramePair, Memory, Plan, Scaling, Sink, TileEngine};
 
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -31,10 +31,10 @@ pub enum Pass<'a> {
 
 impl Pass<'_> {
     #[inline(always)]
-    fn run<const COLS: usize, S: Sink>(
+    fn run<M: Memory, S: Sink>(
         self,
-        engine: &mut Engine<COLS>,
-        plan: &Plan<COLS>,
+        engine: &mut TileEngine<M>,
+        plan: &Plan,
         frames: &FramePair<'_>,
         sink: &mut S,
     ) -> Result<(), Error> {
@@ -56,10 +56,10 @@ impl Pass<'_> {
 }
 
 /// Run `pass` of `engine` over `frames` into `sink`, compiled for `isa`.
-pub fn run<const COLS: usize, S: Sink>(
+pub fn run<M: Memory, S: Sink>(
     isa: Isa,
-    engine: &mut Engine<COLS>,
-    plan: &Plan<COLS>,
+    engine: &mut TileEngine<M>,
+    plan: &Plan,
     frames: &FramePair<'_>,
     pass: Pass<'_>,
     sink: &mut S,
@@ -78,9 +78,9 @@ macro_rules! best_targets {
 }
 
 best_targets! {
-    fn run_best<const COLS: usize, S: Sink>(
-        engine: &mut Engine<COLS>,
-        plan: &Plan<COLS>,
+    fn run_best<M: Memory, S: Sink>(
+        engine: &mut TileEngine<M>,
+        plan: &Plan,
         frames: &FramePair<'_>,
         pass: Pass<'_>,
         sink: &mut S,

@@ -15,27 +15,60 @@ use fixed::types::U32F32;
 use std::sync::Mutex;
 
 use reynoldsflow_core::{
-    Config, Engine, ExtremesSink, FlowPixel, FramePair, Params, Plan, Scaling, Sink, rgb,
+    Config, ExtremesSink, FlowPixel, FramePair, MemorySize, Params, Plan, Scaling, Sink,
+    SliceEngine, rgb,
 };
 
 use crate::dispatch::{self, Isa, Pass};
 use crate::{FlowPlanes, Gray, HostError, workers};
 
-/// Window columns of the host's engine: tiles up to
-/// [`MAX_TILE_WIDTH`] = 128 columns, about 45 KiB of working memory.
-/// Wider frames are cut into strips; every tiling gives the same bytes.
-pub const ENGINE_COLS: usize = 142;
+/// Width of the host's default tiles: full-height strips of 128 columns
+/// (windows of 142, about 45 KiB of working memory, which stay in a core's
+/// L2 cache). Any other tile width up to the frame's runs too, in an
+/// engine grown to it; every tiling gives the same bytes.
+pub const STRIP_WIDTH: usize = 128;
 
-/// The host engine: the one place its type is named (benches, tests and the
-/// element use this alias).
-pub type HostEngine = Engine<ENGINE_COLS>;
+/// The host's engine memory: vectors grown to the widest tile asked for,
+/// kept pair after pair, lent to the core as a [`SliceEngine`]. The one
+/// place the host's engine is named (benches, tests and the element use it).
+#[derive(Default)]
+pub struct HostEngine {
+    words: Vec<i32>,
+    halves: Vec<i16>,
+    bytes: Vec<u8>,
+    pixels: Vec<FlowPixel>,
+}
 
-/// A tiling for [`HostEngine`].
-pub type HostPlan = Plan<ENGINE_COLS>;
+impl HostEngine {
+    /// Empty memory: the first engine asked for sizes it.
+    pub fn new() -> Self {
+        Self::default()
+    }
 
-/// Widest tile the host accepts (wider requests are refused with
-/// [`reynoldsflow_core::Error::TileTooWide`] rather than silently cut).
-pub const MAX_TILE_WIDTH: usize = HostEngine::MAX_TILE_WIDTH;
+    /// A core engine in this memory for every tile of `plan` in one window
+    /// (the memory grows to the plan's tile width first).
+    pub fn engine(&mut self, plan: &Plan) -> Result<SliceEngine<'_>, HostError> {
+        let size = MemorySize::for_tile_width(plan.tile_width())
+            .ok_or(HostError::Core(reynoldsflow_core::Error::FrameTooLarge))?;
+        grow(&mut self.words, size.words, 0);
+        grow(&mut self.halves, size.halves, 0);
+        grow(&mut self.bytes, size.bytes, 0);
+        grow(&mut self.pixels, size.pixels, FlowPixel::default());
+        Ok(SliceEngine::new(
+            &mut self.words,
+            &mut self.halves,
+            &mut self.bytes,
+            &mut self.pixels,
+        )?)
+    }
+}
+
+/// `buffer` at least `len` long (never shrunk: the engine reuses it).
+fn grow<T: Clone>(buffer: &mut Vec<T>, len: usize, zero: T) {
+    if buffer.len() < len {
+        buffer.resize(len, zero);
+    }
+}
 
 /// The core's output for a frame pair, row-major planes of `width · height`.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,18 +83,13 @@ pub struct FixedOutput {
     pub rep: Vec<u8>,
 }
 
-/// A boxed host engine: too large for a worker's or a test thread's stack.
-pub fn boxed_engine() -> Box<HostEngine> {
-    Box::new(HostEngine::new())
-}
-
 /// Checked geometry of one pair: configuration, tiling and the frames.
 pub fn prepare<'a>(
     prev: &'a Gray,
     next: &'a Gray,
     params: Params,
     tile: Option<(usize, usize)>,
-) -> Result<(HostPlan, FramePair<'a>), HostError> {
+) -> Result<(Plan, FramePair<'a>), HostError> {
     if prev.size() != next.size() {
         return Err(HostError::SizeMismatch {
             prev: prev.size(),
@@ -71,7 +99,7 @@ pub fn prepare<'a>(
     let (width, height) = prev.size();
     let config = Config::new(width, height, params)?;
     let plan = match tile {
-        None => Plan::strips(config)?,
+        None => Plan::strips(config, STRIP_WIDTH)?,
         Some((tw, th)) => Plan::new(config, tw, th)?,
     };
     let frames = FramePair::packed(&config, &prev.pixels, &next.pixels)?;
@@ -119,7 +147,7 @@ impl Sink for PixelRows<'_> {
 /// returns the extremes of the magnitudes.
 pub fn pixels_on(
     threads: usize,
-    plan: &HostPlan,
+    plan: &Plan,
     frames: &FramePair<'_>,
     pixels: &mut Vec<FlowPixel>,
 ) -> Result<ExtremesSink, HostError> {
@@ -145,10 +173,12 @@ pub fn pixels_on(
     }
     // One lock per tile, taken once: it hands the tile's rows to its thread.
     let tiles: Vec<Mutex<PixelRows<'_>>> = tiles.into_iter().map(Mutex::new).collect();
-    let results = workers::map_indices(threads, tiles.len(), boxed_engine, |engine, index| {
+    let results = workers::map_indices(threads, tiles.len(), HostEngine::new, |engine, index| {
         let mut tile = tiles[index].lock().expect("each tile is taken once");
         let pass = Pass::Tile(index);
-        dispatch::run(Isa::Best, engine, plan, frames, pass, &mut *tile).map(|()| tile.extremes)
+        let engine = &mut engine.engine(plan)?;
+        dispatch::run(Isa::Best, engine, plan, frames, pass, &mut *tile)?;
+        Ok::<_, HostError>(tile.extremes)
     });
     let mut extremes = ExtremesSink::default();
     for tile in results {
@@ -204,12 +234,11 @@ pub fn rgb_of(
     workers::map_indices(threads, bands.len(), || (), |(), i| bytes(bands[i])).concat()
 }
 
-/// Run the core on `(prev, next)` with `params`, in full-height strips as
-/// wide as the engine allows, or in `tile = (width, height)` tiles when
-/// given, the widest instructions the CPU has: [`FrameEngine::compute`] on
-/// a fresh engine. Fails when the frames differ in size, or the core
-/// refuses the size, the parameters or the tile (e.g. wider than
-/// [`MAX_TILE_WIDTH`]).
+/// Run the core on `(prev, next)` with `params`, in full-height strips
+/// [`STRIP_WIDTH`] wide, or in `tile = (width, height)` tiles when given,
+/// the widest instructions the CPU has: [`FrameEngine::compute`] on a fresh
+/// engine. Fails when the frames differ in size, or the core refuses the
+/// size, the parameters or the tile (empty).
 pub fn compute_fixed(
     prev: &Gray,
     next: &Gray,
@@ -238,7 +267,7 @@ pub fn compute_fixed_on(
 /// this value, so the RGB path allocates nothing once its buffers have
 /// grown to the frame size.
 pub struct FrameEngine {
-    engine: Box<HostEngine>,
+    engine: HostEngine,
     /// Which compilation of the engine pass runs.
     isa: Isa,
     /// `[|v_d|, |v_c|]` of every pixel of the last pair (per-frame min–max
@@ -263,7 +292,7 @@ impl FrameEngine {
     /// same bytes).
     pub fn on(isa: Isa) -> Self {
         Self {
-            engine: boxed_engine(),
+            engine: HostEngine::new(),
             isa,
             magnitudes: Vec::new(),
         }
@@ -283,14 +312,8 @@ impl FrameEngine {
         let (width, height) = prev.size();
         let mut pixels = vec![FlowPixel::default(); width * height];
         let mut sink = PixelRows::whole(&mut pixels, width);
-        dispatch::run(
-            self.isa,
-            &mut self.engine,
-            &plan,
-            &frames,
-            Pass::All,
-            &mut sink,
-        )?;
+        let engine = &mut self.engine.engine(&plan)?;
+        dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
         let extremes = sink.extremes;
         let rep = rgb_of(&pixels, width, extremes, scaling, 1);
         Ok(output(width, height, &pixels, rep))
@@ -315,7 +338,7 @@ impl FrameEngine {
         let (width, height) = prev.size();
         // Every byte is overwritten below; resizing a reused buffer of the same size is free.
         rgb.resize(3 * width * height, 0);
-        let engine = &mut *self.engine;
+        let engine = &mut self.engine.engine(&plan)?;
         if !matches!(scaling, Scaling::PerFrameMinMax) {
             // Known gains: the core's `represent` streams rows into the bytes in one pass.
             let pass = Pass::Represent(scaling, rgb);
@@ -405,7 +428,9 @@ mod tests {
         let (plan, frames) = prepare(a, b, Params::DEFAULT, None).unwrap();
         let mut rgb = vec![0u8; 3 * a.width * a.height];
         let job = plan.bind(frames).unwrap();
-        reynoldsflow_core::represent(&mut boxed_engine(), &job, scaling, &mut rgb, ()).unwrap();
+        let mut memory = HostEngine::new();
+        let engine = &mut memory.engine(&plan).unwrap();
+        reynoldsflow_core::represent(engine, &job, scaling, &mut rgb, ()).unwrap();
         rgb
     }
 
@@ -416,7 +441,17 @@ mod tests {
             let strips = compute_fixed(&a, &b, Params::DEFAULT, None, scaling).unwrap();
             assert!(strips.rep == core_represent(&a, &b, scaling), "{scaling:?}");
             assert!(strips.m_d.iter().any(|&m| m > 0.0));
-            for tile in [(17, 9), (128, 45), (1, 45), (7, 5), (64, 3)].map(Some) {
+            for tile in [
+                (17, 9),
+                (128, 45),
+                (1, 45),
+                (7, 5),
+                (64, 3),
+                (300, 7),
+                (129, 45),
+            ]
+            .map(Some)
+            {
                 let tiled = compute_fixed(&a, &b, Params::DEFAULT, tile, scaling).unwrap();
                 assert!(tiled == strips, "tile {tile:?}, {scaling:?}");
             }
@@ -465,37 +500,37 @@ mod tests {
                 }
             }
         }
-        let wide = engine.represent(
-            &frame(200, 4, 0),
-            &frame(200, 4, 1),
-            Params::DEFAULT,
-            Some((129, 4)),
-            Scaling::PerFrameMinMax,
-            &mut rgb,
-        );
-        assert!(matches!(
-            wide,
-            Err(HostError::Core(
-                reynoldsflow_core::Error::TileTooWide { .. }
-            ))
-        ));
+        // A tile as wide as the frame: the engine grows to it, same bytes.
+        let (a, b) = (frame(300, 45, 10), frame(300, 45, 11));
+        let strips = engine
+            .compute(&a, &b, Params::DEFAULT, None, Scaling::PerFrameMinMax)
+            .unwrap();
+        engine
+            .represent(
+                &a,
+                &b,
+                Params::DEFAULT,
+                Some((300, 4)),
+                Scaling::PerFrameMinMax,
+                &mut rgb,
+            )
+            .unwrap();
+        assert!(rgb == strips.rep);
     }
 
     #[test]
-    fn refuses_wide_tiles_and_mismatched_frames() {
+    fn refuses_empty_tiles_and_mismatched_frames() {
         let (a, b) = (frame(200, 4, 0), frame(200, 4, 1));
-        let wide = compute_fixed(
+        let empty = compute_fixed(
             &a,
             &b,
             Params::DEFAULT,
-            Some((129, 4)),
+            Some((0, 4)),
             Scaling::PerFrameMinMax,
         );
         assert!(matches!(
-            wide,
-            Err(HostError::Core(reynoldsflow_core::Error::TileTooWide {
-                max: 128
-            }))
+            empty,
+            Err(HostError::Core(reynoldsflow_core::Error::TileOutOfFrame))
         ));
         let c = frame(4, 200, 0);
         let mismatch = compute_fixed(&a, &c, Params::DEFAULT, None, Scaling::PerFrameMinMax);

@@ -7,11 +7,11 @@
 //! tiling gives the same bytes.
 
 use reynoldsflow_core::{
-    Config, ExtremesSink, FlowPixel, Frame, FramePair, HALO, IntensityScale, Params, Scaling,
+    Config, ExtremesSink, FlowPixel, Frame, FramePair, HALO, IntensityScale, Params, Plan, Scaling,
 };
 
 use crate::cli::values::{EngineKind, ScaleArg};
-use crate::fixed_engine::{self, HostPlan, MAX_TILE_WIDTH};
+use crate::fixed_engine::{self, STRIP_WIDTH};
 use crate::outputs::{OutputSpec, PairFields, Variant};
 use crate::pipeline::{self, Compute};
 use crate::{FlowPlanes, HostError};
@@ -75,7 +75,7 @@ impl PairPool {
         }
         let config = Config::new(width, height, self.params)?;
         let (tile_width, tile_height) = balanced_tile(width, height, self.threads);
-        let plan = HostPlan::new(config, tile_width, tile_height)?;
+        let plan = Plan::new(config, tile_width, tile_height)?;
         let frames = FramePair::new(&config, prev, next)?;
         let extremes = fixed_engine::pixels_on(self.threads, &plan, &frames, &mut self.pixels)?;
         Ok(PairPixels {
@@ -89,12 +89,12 @@ impl PairPool {
     }
 }
 
-/// Tile size for `threads`: the widest tiles the engine takes, or narrower
+/// Tile size for `threads`: the host's strip width, or narrower
 /// ones, in as many rows of tiles as gives the shortest pass, counting each
 /// tile's halo (`HALO` px on every side) and `⌈tiles / threads⌉` rounds.
 fn balanced_tile(width: usize, height: usize, threads: usize) -> (usize, usize) {
-    let min_across = width.div_ceil(MAX_TILE_WIDTH);
-    let mut best = (usize::MAX, (width.min(MAX_TILE_WIDTH), height));
+    let min_across = width.div_ceil(STRIP_WIDTH);
+    let mut best = (usize::MAX, (width.min(STRIP_WIDTH), height));
     for across in min_across..=min_across + threads {
         for down in 1..=(2 * threads).min(height) {
             let (tw, th) = (width.div_ceil(across), height.div_ceil(down));
@@ -168,13 +168,13 @@ mod tests {
     #[test]
     fn tiles_are_balanced_over_the_threads() {
         // One thread: the engine's widest full-height strips.
-        assert_eq!(balanced_tile(640, 480, 1), (MAX_TILE_WIDTH, 480));
+        assert_eq!(balanced_tile(640, 480, 1), (STRIP_WIDTH, 480));
         // 640 px is five such strips: two or four threads get an even count.
         for threads in [2, 4] {
             let (tw, th) = balanced_tile(640, 480, threads);
             let tiles = 640usize.div_ceil(tw) * 480usize.div_ceil(th);
             assert_eq!(tiles % threads, 0, "{threads} threads: {tw}x{th}");
-            assert!(tw <= MAX_TILE_WIDTH);
+            assert!(tw <= STRIP_WIDTH);
         }
     }
 

@@ -42,7 +42,7 @@ impl Sink for PixelPlane {
 
 /// The whole frame computed with tiles of `tile` (width, height).
 pub fn run_tiled(config: &Config, prev: &[u8], next: &[u8], tile: (usize, usize)) -> PixelPlane {
-    let plan = Plan::<COLS>::new(*config, tile.0, tile.1).expect("tile fits the test engine");
+    let plan = Plan::new(*config, tile.0, tile.1).expect("a tile of at least one pixel");
     let frames = FramePair::packed(config, prev, next).expect("frames of the config's size");
     let job = plan.bind(frames).expect("frames of the plan's size");
     let mut out = PixelPlane::new(config);

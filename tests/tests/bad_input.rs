@@ -21,12 +21,11 @@ proptest! {
             Err(Error::EmptyFrame) => prop_assert!(w == 0 || h == 0),
             Err(Error::FrameTooLarge) => prop_assert!(w > 65_535 || h > 65_535),
             Err(e) => prop_assert!(false, "unexpected {e}"),
-            Ok(config) => match Plan::<78>::new(config, tw, th) {
+            Ok(config) => match Plan::new(config, tw, th) {
                 Err(Error::TileOutOfFrame) => prop_assert!(tw == 0 || th == 0),
-                Err(Error::TileTooWide { max }) => prop_assert!(max == 64 && tw.min(w) > 64),
                 Err(e) => prop_assert!(false, "unexpected {e}"),
                 Ok(plan) => {
-                    prop_assert!(plan.tile_width() <= 64);
+                    prop_assert!(plan.tile_width() == tw.min(w));
                     let covered: usize = plan.tiles().map(|t| t.width * t.height).sum();
                     prop_assert_eq!(covered, w * h);
                 }
@@ -70,7 +69,7 @@ proptest! {
         let config = config.unwrap();
         let (prev, next) = frame_pair(Pattern::ALL[pattern], w, h, seed);
         let mut engine = Box::new(Engine::<64>::new());
-        let plan = Plan::strips(config).unwrap();
+        let plan = Plan::strips(config, Engine::<64>::MAX_TILE_WIDTH).unwrap();
         let job = plan.bind(FramePair::packed(&config, &prev, &next).unwrap()).unwrap();
         let mut rgb = vec![0; w * h * 3];
         // A sink that reads the fields too, so their conversions run.
@@ -97,7 +96,7 @@ fn parameter_extremes_run_on_saturated_frames() {
                 let (prev, next) = frame_pair(pattern, 40, 30, seed);
                 let mut engine = Box::new(Engine::<64>::new());
                 let mut rgb = vec![0; 40 * 30 * 3];
-                let plan = Plan::strips(config).unwrap();
+                let plan = Plan::strips(config, Engine::<64>::MAX_TILE_WIDTH).unwrap();
                 let job = plan
                     .bind(FramePair::packed(&config, &prev, &next).unwrap())
                     .unwrap();
@@ -156,10 +155,10 @@ fn mismatched_and_short_buffers_are_typed_errors() {
     let other = Config::new(9, 6, Params::DEFAULT).unwrap();
     let frames = FramePair::packed(&config, &a, &a).unwrap();
     let mut engine = Box::new(Engine::<64>::new());
-    let plan = Plan::<64>::strips(other).unwrap();
+    let plan = Plan::strips(other, 50).unwrap();
     assert_eq!(plan.bind(frames).unwrap_err(), Error::SizeMismatch);
     // Past the last tile: nothing computed, and said so.
-    let plan = Plan::strips(config).unwrap();
+    let plan = Plan::strips(config, 50).unwrap();
     let job = plan.bind(frames).unwrap();
     assert_eq!(engine.run_tile(&job, 99, &mut ()), None);
     assert_eq!(engine.run_tile(&job, 0, &mut ()), plan.tile(0));

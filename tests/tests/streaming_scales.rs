@@ -3,7 +3,7 @@
 
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{
-    ByteScale, Config, ExtremesSink, FramePair, Params, Plan, PreviousFrameMinMax, RgbSink,
+    ByteScale, Config, Engine, ExtremesSink, FramePair, Params, Plan, PreviousFrameMinMax, RgbSink,
     RowStream, Scaling, byte_scales,
 };
 use reynoldsflow_tests::{COLS, Pattern, engine, frame_pair};
@@ -12,7 +12,7 @@ use reynoldsflow_tests::{COLS, Pattern, engine, frame_pair};
 fn previous_frame_min_max_uses_the_last_frames_extremes() {
     let (w, h) = (48, 32);
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let plan = Plan::<COLS>::strips(config).unwrap();
+    let plan = Plan::strips(config, Engine::<COLS>::MAX_TILE_WIDTH).unwrap();
     let first = ByteScale::fixed(U16F16::from_num(8));
     let mut scales = PreviousFrameMinMax::new(first, first);
     let mut engine = engine();

@@ -61,7 +61,7 @@ pub struct Panels {
 pub struct Analysis {
     config: Config,
     engine: Box<Engine<COLS>>,
-    plan: Plan<COLS>,
+    plan: Plan,
     cues: Box<Cues>,
     scales: PreviousFrameMinMax,
     panels: Panels,
@@ -76,7 +76,7 @@ impl Analysis {
     /// With other cue settings.
     pub fn with_params(params: CueParams) -> Result<Self, DemoError> {
         let config = Config::new(WIDTH, HEIGHT, Params::DEFAULT)?;
-        let plan = Plan::new(config, COLS - 14, HEIGHT)?;
+        let plan = Plan::strips(config, Engine::<COLS>::MAX_TILE_WIDTH)?;
         let cues = Box::new(Cues::new(&config, params)?);
         let flat = ByteScale::fixed(U16F16::ZERO);
         let plane = || vec![0u16; WIDTH * HEIGHT];

@@ -3,7 +3,7 @@
 //! into tiles or strips, and a full list keeps the strongest.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, RowStream, Sink};
+use reynoldsflow_core::{Arrays, Config, Engine, FramePair, Params, Plan, RowStream, Sink};
 use reynoldsflow_cues::{CueParams, Field, FrameLevel, MotionCues, Region, Threshold};
 use reynoldsflow_demo::analysis::{Analysis, Cues, HEIGHT, MAX_CUES, WIDTH, cue_params};
 use reynoldsflow_demo::scene::{Lighting, PixelBox, Scene, static_frame};
@@ -94,7 +94,7 @@ fn tiled<const COLS: usize>(
     tile: (usize, usize),
 ) -> Vec<(Vec<Region>, FrameLevel)> {
     let mut engine = Box::new(Engine::<COLS>::new());
-    let plan = Plan::<COLS>::new(config(), tile.0, tile.1).unwrap();
+    let plan = Plan::new(config(), tile.0, tile.1).unwrap();
     cue_sequence(frames, params, |pair, cues| {
         engine.run(&plan.bind(*pair).unwrap(), cues)
     })
@@ -113,7 +113,7 @@ fn streamed(
     let config = config();
     cue_sequence(frames, params, |pair, cues| {
         let mut x = 0;
-        let mut streams: Vec<RowStream<'_, 78>> = engines
+        let mut streams: Vec<RowStream<'_, Arrays<78>>> = engines
             .iter_mut()
             .zip(widths)
             .map(|(engine, &w)| {
@@ -257,7 +257,7 @@ fn cues_compose_with_the_rgb_sink() {
     let (prev, next) = (scene.frame(30), scene.frame(31));
     let config = config();
     let mut engine = Box::new(Engine::<78>::new());
-    let plan = Plan::strips(config).unwrap();
+    let plan = Plan::strips(config, Engine::<78>::MAX_TILE_WIDTH).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, &prev, &next).unwrap())
         .unwrap();

@@ -27,7 +27,7 @@ struct Figures {
 fn measure(frames: &[Vec<u8>], params: CueParams) -> Figures {
     let config = Config::new(WIDTH, HEIGHT, Params::DEFAULT).unwrap();
     let mut engine = Box::new(Engine::<78>::new());
-    let plan = Plan::strips(config).unwrap();
+    let plan = Plan::strips(config, Engine::<78>::MAX_TILE_WIDTH).unwrap();
     let mut cues = Box::new(Cues::new(&config, params).unwrap());
     let mut figures = Figures::default();
     let mut found = 0u32;

@@ -39,7 +39,7 @@ fn run() -> i32 {
     let setup = Config::new(WIDTH, HEIGHT, Params::DEFAULT).and_then(|config| {
         Ok((
             config,
-            Plan::<COLS>::strips(config)?,
+            Plan::strips(config, Engine::<COLS>::MAX_TILE_WIDTH)?,
             FramePair::packed(&config, PREV, NEXT)?,
         ))
     });

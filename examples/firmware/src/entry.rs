@@ -115,7 +115,7 @@ pub fn rf_emit_row(harness: &mut Harness, y: usize, x: usize, row: &[[u8; 3]]) {
 /// engine into the RGB sink.
 #[unsafe(no_mangle)]
 #[inline(never)]
-pub fn rf_engine_entry(engine: &mut Engine<COLS>, job: &Job<'_, COLS>, sink: &mut RgbRows<'_>) {
+pub fn rf_engine_entry(engine: &mut Engine<COLS>, job: &Job<'_>, sink: &mut RgbRows<'_>) {
     engine.run(job, sink)
 }
 
@@ -127,7 +127,7 @@ pub fn rf_engine_entry(engine: &mut Engine<COLS>, job: &Job<'_, COLS>, sink: &mu
 #[inline(never)]
 pub fn rf_canary_entry(
     engine: &mut Engine<COLS>,
-    job: &Job<'_, COLS>,
+    job: &Job<'_>,
     sink: &mut RgbRows<'_>,
     index: usize,
 ) {

@@ -8,10 +8,10 @@ use std::hint::black_box;
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling};
 use reynoldsflow_host::dispatch::{self, Isa, Pass};
-use reynoldsflow_host::fixed_engine::ENGINE_COLS;
+use reynoldsflow_host::fixed_engine::STRIP_WIDTH;
 
-/// Window columns of the host engine (strips of 128 output columns).
-pub const COLS: usize = ENGINE_COLS;
+/// Window columns of the host's default strips (128 output columns).
+pub const COLS: usize = STRIP_WIDTH + 14;
 
 /// The frame sizes every bench covers.
 pub const SIZES: [(usize, usize); 4] = [(160, 120), (320, 240), (640, 480), (1280, 720)];
@@ -35,8 +35,8 @@ pub fn core_engine<const N: usize>(
 ) -> impl FnMut() + use<N> {
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
     let plan = match tile {
-        None => Plan::<N>::strips(config).unwrap(),
-        Some((tw, th)) => Plan::<N>::new(config, tw, th).unwrap(),
+        None => Plan::strips(config, Engine::<N>::MAX_TILE_WIDTH).unwrap(),
+        Some((tw, th)) => Plan::new(config, tw, th).unwrap(),
     };
     let (prev, next) = (prev.to_vec(), next.to_vec());
     let mut engine = Box::new(Engine::<N>::new());

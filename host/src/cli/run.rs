@@ -54,7 +54,7 @@ pub struct ComputeArgs {
     /// to 2^-32).
     #[arg(long, value_name = "L", default_value = "1e-4", value_parser = values::parse_lambda)]
     pub lambda: f64,
-    /// Tile size for the fixed engine (width at most 128); default: strips
+    /// Tile size for the fixed engine (any, up to the frame); default: strips
     /// of 128 columns. Every tiling gives the same output.
     #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
     pub tile: Option<TileSize>,

@@ -19,7 +19,7 @@ Options shared by the computing functions (all keyword-only):
   1/255. A float is taken as the exact ratio it rounds from (``1/255``);
   also a ``fractions.Fraction``, a pair ``(num, den)`` or ``"1/255"``.
 - ``lam``: the Tikhonov term lambda of the 2x2 solve (default 1e-4).
-- ``tile``: ``(width, height)`` tiles for the fixed engine (width <= 128);
+- ``tile``: ``(width, height)`` tiles for the fixed engine (any size);
   every tiling gives the same bytes.
 - ``variant``: the image: ``"dc"`` = [|v_d|, |v_c|, f] (default), ``"dc0"``
   = [|v_d|, 0, f], ``"cd"`` = [|v_c|, |v_d|, f], ``"hsv"`` = colour wheel of
