@@ -134,3 +134,25 @@ def test_scaled_size_only_scales_down():
     assert footage.scaled_size(96, 64, 384) == (96, 64)
     assert footage.scaled_size(100, 1, 10) == (10, 1)
 
+
+def test_readme_panel_is_the_defaults_on_vtest(repo):
+    """The committed panel (docs/downstream/footage.*) is the command at its
+    defaults on the clip scripts/fetch-vtest extracts, and the README shows
+    it with the commands that make it."""
+    md = (repo / "docs" / "downstream" / "footage.md").read_text()
+    assert "`python -m reynoldsflow.bench.footage --video target/footage/vtest.avi --out docs/downstream`" in md
+    digest = re.search(r"SHA-256 `([0-9a-f]{64})`", md).group(1)
+    assert digest in footage.KNOWN_SOURCES and footage.KNOWN_SOURCES[digest] in md
+    frames = int(re.search(r"decoded at \d+×\d+ \(ffmpeg `scale`, area\), (\d+) frames", md).group(1))
+    w, h = footage.scaled_size(768, 576, footage.DEFAULT_WIDTH)
+    assert f"768×576, decoded at {w}×{h}" in md
+    rows = re.findall(r"^\| \d+ \| (\d+), \d+ \|", md, re.M)
+    assert [int(t) for t in rows] == footage.pair_starts(frames, footage.DEFAULT_PAIRS)
+    png = read_png(repo / "docs" / "downstream" / "footage.png")
+    want_w, want_h = footage.panel_size(footage.DEFAULT_PAIRS, w, h)
+    assert abs(png.shape[1] - want_w) <= 1 and abs(png.shape[0] - want_h) <= 1
+
+    readme = " ".join((repo / "README.md").read_text().split())
+    assert "`scripts/fetch-vtest`" in readme and (repo / "scripts" / "fetch-vtest").is_file()
+    assert "`python -m reynoldsflow.bench.footage --video target/footage/vtest.avi --out DIR`" in readme
+    assert "(docs/downstream/footage.png)" in readme
