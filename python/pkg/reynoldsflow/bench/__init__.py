@@ -1,1 +1,3 @@
-"""Benchmarks that drive the package (``python -m reynoldsflow.bench.downstream``)."""
+"""Benchmarks that drive the package: ``python -m reynoldsflow.bench.downstream``
+(the detector benchmark) and ``python -m reynoldsflow.bench.footage`` (a
+qualitative panel on real footage)."""
