@@ -408,10 +408,9 @@ impl<M: Memory> TileEngine<M> {
                 y_first,
                 t: 0,
             });
-            let mut pass = self.pass();
             for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
                 let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
-                pass.push(config, prev, next, sink);
+                self.push(config, prev, next, sink);
             }
         }
     }
@@ -607,8 +606,11 @@ fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d
     let left = (-x_first).min(n as isize).max(0) as usize;
     let start = x_first.max(0) as usize;
     let inside = width.saturating_sub(start).min(n - left);
-    let (p_left, p_rest) = p0.split_at_mut(left);
-    let (d_left, d_rest) = d.split_at_mut(left);
+    let (Some((p_left, p_rest)), Some((d_left, d_rest))) =
+        (p0.split_at_mut_checked(left), d.split_at_mut_checked(left))
+    else {
+        return; // left ≤ n ≤ both lengths: never taken
+    };
     p_left.fill(first);
     d_left.fill(i16::from(first_next) - i16::from(first));
     let (src_p, src_n) = (

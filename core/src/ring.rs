@@ -2,26 +2,34 @@
 
 /// `DEPTH` rows of `cols` elements, carved from the engine's memory; row `t`
 /// lives in slot `t mod DEPTH`, so a stage keeps exactly the rows the next
-/// stage still reads.
+/// stage still reads. One slice, not `DEPTH`: the engine's rows sit on the
+/// stack of a 16 KiB M0 while it runs.
 pub(crate) struct RowRing<'m, T, const DEPTH: usize> {
-    rows: [&'m mut [T]; DEPTH],
+    rows: &'m mut [T],
+    cols: usize,
 }
 
 impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
-    /// The next `DEPTH` rows of `cols` elements of `memory` (see
-    /// [`take_rows`]).
+    /// The next `DEPTH` rows of `cols` elements of `memory` (see [`take`]).
     #[inline(always)]
     pub(crate) fn carve(memory: &mut &'m mut [T], cols: usize) -> Self {
         Self {
-            rows: take_rows(memory, cols),
+            rows: take(memory, DEPTH * cols),
+            cols,
         }
     }
 
-    /// Row `t` (the slot it shares with rows `t ± DEPTH`).
+    /// Where row `t` starts (the slot it shares with rows `t ± DEPTH`).
+    #[inline(always)]
+    fn slot(&self, t: usize) -> core::ops::Range<usize> {
+        let start = (t % DEPTH) * self.cols;
+        start..start + self.cols
+    }
+
+    /// Row `t` (empty if the memory was short, which the engines rule out).
     #[inline(always)]
     pub(crate) fn row(&self, t: usize) -> &[T] {
-        // `t % DEPTH < DEPTH`: the compiler keeps no bounds check.
-        self.rows[t % DEPTH]
+        self.rows.get(self.slot(t)).unwrap_or(&[])
     }
 
     /// Rows `first .. first + K`, oldest first.
@@ -33,7 +41,8 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
     /// Row `t`, to be written.
     #[inline(always)]
     pub(crate) fn row_mut(&mut self, t: usize) -> &mut [T] {
-        self.rows[t % DEPTH]
+        let slot = self.slot(t);
+        self.rows.get_mut(slot).unwrap_or(&mut [])
     }
 }
 

@@ -31,8 +31,12 @@
 //! The bounds are worst cases over all inputs (`Dn`'s first term at the
 //! largest admissible `κ`); the tests run with overflow checks on.
 //!
-//! Loops walk zipped slices and windows, never indices, so no bounds check
-//! (and no panic path) is left for the compiler to keep.
+//! Each loop first cuts every row it reads or writes to exactly the columns
+//! it covers (`cut`: a length the compiler knows), then counts over them:
+//! no bounds check (and no panic path) is left for the compiler to keep, the
+//! loops vectorise without telling the rows apart by address, and a row the
+//! memory cannot serve (never, once an engine has validated its memory)
+//! makes the kernel do nothing.
 
 use core::ops::{Add, Shl};
 
@@ -49,60 +53,6 @@ fn span(n: usize, r: usize) -> core::ops::Range<usize> {
     r..n.saturating_sub(r)
 }
 
-/// The row shifted by `−r … +r` around columns `cols` (`K = 2r + 1`
-/// slices of `cols.len()` elements, slice `k` starting at `cols.start − r + k`).
-/// A column range the row cannot serve gives empty slices: the kernels zip
-/// these slices, which vectorises and leaves no bounds check to fail.
-#[inline(always)]
-fn shifted<T, const K: usize>(row: &[T], cols: core::ops::Range<usize>) -> [&[T]; K] {
-    let (r, len) = (K / 2, cols.len());
-    let first = cols
-        .start
-        .checked_sub(r)
-        .filter(|_| cols.end + r <= row.len());
-    core::array::from_fn(|k| match first {
-        Some(first) => row.get(first + k..first + k + len).unwrap_or(&[]),
-        None => &[],
-    })
-}
-
-/// The 3-wide neighbourhoods of columns `cols` of a row, as arrays.
-#[inline(always)]
-fn neighbourhoods3<T: Copy>(
-    row: &[T],
-    cols: core::ops::Range<usize>,
-) -> impl Iterator<Item = [T; 3]> + '_ {
-    let [a, b, c] = shifted::<T, 3>(row, cols);
-    a.iter().zip(b).zip(c).map(|((&a, &b), &c)| [a, b, c])
-}
-
-/// The 5-wide neighbourhoods of columns `cols` of a row, as arrays.
-#[inline(always)]
-fn neighbourhoods5<T: Copy>(
-    row: &[T],
-    cols: core::ops::Range<usize>,
-) -> impl Iterator<Item = [T; 5]> + '_ {
-    let [a, b, c, d, e] = shifted::<T, 5>(row, cols);
-    a.iter()
-        .zip(b)
-        .zip(c)
-        .zip(d)
-        .zip(e)
-        .map(|((((&a, &b), &c), &d), &e)| [a, b, c, d, e])
-}
-
-/// Columns `cols` of a row, to be read (empty if out of range).
-#[inline(always)]
-fn points<T>(row: &[T], cols: core::ops::Range<usize>) -> core::slice::Iter<'_, T> {
-    row.get(cols).unwrap_or(&[]).iter()
-}
-
-/// Columns `cols` of a row, to be written (empty if out of range).
-#[inline(always)]
-fn columns<T>(row: &mut [T], cols: core::ops::Range<usize>) -> &mut [T] {
-    row.get_mut(cols).unwrap_or(&mut [])
-}
-
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
@@ -111,10 +61,15 @@ where
     T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
 {
     let cols = span(n, r);
-    let [a, b, c, d, e] = rows.map(|row| points(row, cols.clone()));
-    let taps = a.zip(b).zip(c).zip(d).zip(e);
-    for (o, ((((&a, &b), &c), &d), &e)) in columns(out, cols).iter_mut().zip(taps) {
-        *o = binomial(a, b, c, d, e);
+    let len = cols.len();
+    let [a, b, c, d, e] = rows.map(|row| cut(row, cols.start, len));
+    let (Some(a), Some(b), Some(c), Some(d), Some(e), Some(out)) =
+        (a, b, c, d, e, cut_mut(out, cols.start, len))
+    else {
+        return;
+    };
+    for i in 0..len {
+        out[i] = binomial(a[i], b[i], c[i], d[i], e[i]);
     }
 }
 
@@ -125,9 +80,20 @@ where
     T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
 {
     let cols = span(n, r.max(2));
-    let taps = neighbourhoods5(row, cols.clone());
-    for (o, [a, b, c, d, e]) in columns(out, cols).iter_mut().zip(taps) {
-        *o = binomial(a, b, c, d, e);
+    let len = cols.len();
+    let at = |shift: usize| cut(row, (cols.start + shift).wrapping_sub(2), len);
+    let (Some(a), Some(b), Some(c), Some(d), Some(e), Some(out)) = (
+        at(0),
+        at(1),
+        at(2),
+        at(3),
+        at(4),
+        cut_mut(out, cols.start, len),
+    ) else {
+        return;
+    };
+    for i in 0..len {
+        out[i] = binomial(a[i], b[i], c[i], d[i], e[i]);
     }
 }
 
@@ -149,36 +115,77 @@ pub fn boundary_minus_domain(
     e: Pair<'_, i32>,
     n: usize,
 ) {
-    let cols = span(n, 0);
-    let [d0, d1, d2, d3, d4] = d.map(|row| points(row, cols.clone()));
-    let taps = d0.zip(d1).zip(d2).zip(d3).zip(d4);
     let [v1, v2, v3, v4] = vert;
-    let parts = columns(v1, cols.clone())
-        .iter_mut()
-        .zip(columns(v2, cols.clone()))
-        .zip(columns(v3, cols.clone()))
-        .zip(columns(v4, cols.clone()));
-    for (((((&a, &b), &c), &dd), &ee), (((v1, v2), v3), v4)) in taps.zip(parts) {
-        *v1 = b + 4 * c + dd;
-        *v2 = (a + ee) + 3 * (b + dd) + 4 * c;
-        *v3 = dd - b;
-        *v4 = (dd + ee) - (a + b);
-    }
+    vertical_parts(d, v1, v2, v3, v4, span(n, 0));
     let (ex, ey) = e;
-    let cols = span(n, 2);
-    let taps = |v| neighbourhoods5(v, cols.clone()).map(|w| w.map(i32::from));
-    let parts = taps(v1).zip(taps(v2)).zip(taps(v3)).zip(taps(v4));
-    let outs = columns(ex, cols.clone())
-        .iter_mut()
-        .zip(columns(ey, cols.clone()));
-    for ((((v1, v2), v3), v4), (ex, ey)) in parts.zip(outs) {
-        let kb_x = v1[3] - v1[1];
-        let bs_x = (v2[3] + v2[4]) - (v2[1] + v2[0]);
-        *ex = kb_x - 3 * bs_x;
-        let kb_y = v3[1] + 4 * v3[2] + v3[3];
-        let bs_y = (v4[0] + v4[4]) + 3 * (v4[1] + v4[3]) + 4 * v4[2];
-        *ey = kb_y - 3 * bs_y;
-        debug_assert!(ex.abs().max(ey.abs()) <= E_MAX, "E = ({ex}, {ey})");
+    horizontal_parts([v1, v2, v3, v4], ex, ey, span(n, 2));
+}
+
+/// The four vertical parts of `E` on columns `cols` (rows as separate
+/// `&mut` parameters, as in [`products_row`]).
+#[inline(always)]
+fn vertical_parts(
+    d: [&[i16]; 5],
+    v1: &mut [i16],
+    v2: &mut [i16],
+    v3: &mut [i16],
+    v4: &mut [i16],
+    cols: core::ops::Range<usize>,
+) {
+    let (start, len) = (cols.start, cols.len());
+    let [d0, d1, d2, d3, d4] = d.map(|row| cut(row, start, len));
+    let (Some(d0), Some(d1), Some(d2), Some(d3), Some(d4)) = (d0, d1, d2, d3, d4) else {
+        return;
+    };
+    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
+        cut_mut(v1, start, len),
+        cut_mut(v2, start, len),
+        cut_mut(v3, start, len),
+        cut_mut(v4, start, len),
+    ) else {
+        return;
+    };
+    for i in 0..len {
+        let (a, b, c, dd, ee) = (d0[i], d1[i], d2[i], d3[i], d4[i]);
+        v1[i] = b + 4 * c + dd;
+        v2[i] = (a + ee) + 3 * (b + dd) + 4 * c;
+        v3[i] = dd - b;
+        v4[i] = (dd + ee) - (a + b);
+    }
+}
+
+/// `E` (x, y) on columns `cols` from its four vertical parts.
+#[inline(always)]
+fn horizontal_parts(
+    vert: [&[i16]; 4],
+    ex: &mut [i32],
+    ey: &mut [i32],
+    cols: core::ops::Range<usize>,
+) {
+    let (start, len) = (cols.start, cols.len());
+    let [v1, v2, v3, v4] = vert.map(|row| taps5(row, start, len));
+    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
+        return;
+    };
+    let (Some(ex), Some(ey)) = (cut_mut(ex, start, len), cut_mut(ey, start, len)) else {
+        return;
+    };
+    let tap = |row: &[&[i16]; 5], k: usize, i: usize| i32::from(row[k][i]);
+    for i in 0..len {
+        let kb_x = tap(&v1, 3, i) - tap(&v1, 1, i);
+        let bs_x = (tap(&v2, 3, i) + tap(&v2, 4, i)) - (tap(&v2, 1, i) + tap(&v2, 0, i));
+        ex[i] = kb_x - 3 * bs_x;
+        let kb_y = tap(&v3, 1, i) + 4 * tap(&v3, 2, i) + tap(&v3, 3, i);
+        let bs_y = (tap(&v4, 0, i) + tap(&v4, 4, i))
+            + 3 * (tap(&v4, 1, i) + tap(&v4, 3, i))
+            + 4 * tap(&v4, 2, i);
+        ey[i] = kb_y - 3 * bs_y;
+        debug_assert!(
+            ex[i].abs().max(ey[i].abs()) <= E_MAX,
+            "E = ({}, {})",
+            ex[i],
+            ey[i]
+        );
     }
 }
 
@@ -251,15 +258,50 @@ pub fn rounded_residual(
     dn
 }
 
-/// The seven products on `[5, n−5)`, then their horizontal `G` on
-/// `[7, n−7)` into one row of each sum ring.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn structure_row(
+/// `len` elements of `row` from `start` (`None` if it is shorter): a slice
+/// whose length the compiler knows is `len`, so indexing it below `len`
+/// keeps no bounds check.
+#[inline(always)]
+fn cut<T>(row: &[T], start: usize, len: usize) -> Option<&[T]> {
+    row.get(start..)?.get(..len)
+}
+
+/// [`cut`], to be written.
+#[inline(always)]
+fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut [T]> {
+    row.get_mut(start..)?.get_mut(..len)
+}
+
+/// The row shifted by `−2 … +2` around `len` columns from `start` (tap `k`
+/// of column `i` is element `start + i + k − 2`), each [`cut`] to `len`.
+#[inline(always)]
+fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
+    let first = start.checked_sub(2)?;
+    Some([
+        cut(row, first, len)?,
+        cut(row, first + 1, len)?,
+        cut(row, first + 2, len)?,
+        cut(row, first + 3, len)?,
+        cut(row, first + 4, len)?,
+    ])
+}
+
+/// The seven products on columns `cols`. Each output row is a parameter of
+/// its own, not an element of an array: `&mut` parameters tell the compiler
+/// the rows do not overlap (they keep telling it once inlined), so it
+/// neither reloads the inputs after every store nor guards vector loops.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn products_row(
     input: &ResidualInputs<'_>,
-    products: &mut [&mut [i32]; CHANNELS],
-    sums: [&mut [i32]; CHANNELS],
-    n: usize,
+    xx: &mut [i32],
+    xy: &mut [i32],
+    yy: &mut [i32],
+    xh: &mut [i32],
+    xl: &mut [i32],
+    yh: &mut [i32],
+    yl: &mut [i32],
+    cols: core::ops::Range<usize>,
 ) {
     let ResidualInputs {
         vx,
@@ -269,26 +311,62 @@ pub fn structure_row(
         kappa,
         shift,
     } = *input;
-    let [xx, xy, yy, xh, xl, yh, yl] = products;
-    let cols = span(n, 5);
-    let point = |row| points::<i32>(row, cols.clone());
-    let three = |row| neighbourhoods3(row, cols.clone()).map(|w| w.map(i32::from));
-    let inputs = neighbourhoods3(vx, cols.clone())
-        .zip(point(vy_up).zip(point(vy)).zip(point(vy_down)))
-        .zip(three(p_up).zip(three(p_mid)).zip(three(p_down)))
-        .zip(points(d, cols.clone()));
-    let outputs = columns(xx, cols.clone())
-        .iter_mut()
-        .zip(columns(xy, cols.clone()))
-        .zip(columns(yy, cols.clone()))
-        .zip(columns(xh, cols.clone()))
-        .zip(columns(xl, cols.clone()))
-        .zip(columns(yh, cols.clone()))
-        .zip(columns(yl, cols.clone()));
-    for (((([vx_l, vx_c, vx_r], ((&vy_u, &vy_c), &vy_d)), ((pu, pm), pd)), &dd), out) in
-        inputs.zip(outputs)
-    {
-        let ((((((xx, xy), yy), xh), xl), yh), yl) = out;
+    // Every row cut to exactly the columns (shifted rows one either side),
+    // then indexed: a counted loop with no bounds left to check.
+    let len = cols.len();
+    let first = cols.start.wrapping_sub(1);
+    let at = |row, shift| cut::<i32>(row, first.wrapping_add(shift), len);
+    let at8 = |row, shift| cut::<u8>(row, first.wrapping_add(shift), len);
+    let (Some(vx_l), Some(vx_c), Some(vx_r), Some(vy_u), Some(vy_c), Some(vy_d)) = (
+        at(vx, 0),
+        at(vx, 1),
+        at(vx, 2),
+        at(vy_up, 1),
+        at(vy, 1),
+        at(vy_down, 1),
+    ) else {
+        return;
+    };
+    let (Some(pu0), Some(pu1), Some(pu2), Some(pm0), Some(pm1), Some(pm2)) = (
+        at8(p_up, 0),
+        at8(p_up, 1),
+        at8(p_up, 2),
+        at8(p_mid, 0),
+        at8(p_mid, 1),
+        at8(p_mid, 2),
+    ) else {
+        return;
+    };
+    let (Some(pd0), Some(pd1), Some(pd2), Some(d)) = (
+        at8(p_down, 0),
+        at8(p_down, 1),
+        at8(p_down, 2),
+        cut(d, cols.start, len),
+    ) else {
+        return;
+    };
+    let start = cols.start;
+    let (Some(xx), Some(xy), Some(yy), Some(xh), Some(xl), Some(yh), Some(yl)) = (
+        cut_mut(xx, start, len),
+        cut_mut(xy, start, len),
+        cut_mut(yy, start, len),
+        cut_mut(xh, start, len),
+        cut_mut(xl, start, len),
+        cut_mut(yh, start, len),
+        cut_mut(yl, start, len),
+    ) else {
+        return;
+    };
+    for i in 0..len {
+        let (vx_l, vx_c, vx_r) = (vx_l[i], vx_c[i], vx_r[i]);
+        let (vy_u, vy_c, vy_d) = (vy_u[i], vy_c[i], vy_d[i]);
+        let pu = [pu0[i], pu1[i], pu2[i]].map(i32::from);
+        let pm = [pm0[i], pm1[i], pm2[i]].map(i32::from);
+        let pd = [pd0[i], pd1[i], pd2[i]].map(i32::from);
+        let dd = d[i];
+        let (xx, xy, yy, xh, xl, yh, yl) = (
+            &mut xx[i], &mut xy[i], &mut yy[i], &mut xh[i], &mut xl[i], &mut yh[i], &mut yl[i],
+        );
         let q = (vx_r - vx_l) + (vy_d - vy_u);
         let x = (pu[2] - pu[0]) + 2 * (pm[2] - pm[0]) + (pd[2] - pd[0]);
         let y = (pd[0] + 2 * pd[1] + pd[2]) - (pu[0] + 2 * pu[1] + pu[2]);
@@ -305,6 +383,20 @@ pub fn structure_row(
         *yh = y * h;
         *yl = y * l;
     }
+}
+
+/// The seven products on `[5, n−5)`, then their horizontal `G` on
+/// `[7, n−7)` into one row of each sum ring.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn structure_row(
+    input: &ResidualInputs<'_>,
+    products: &mut [&mut [i32]; CHANNELS],
+    sums: [&mut [i32]; CHANNELS],
+    n: usize,
+) {
+    let [xx, xy, yy, xh, xl, yh, yl] = products;
+    products_row(input, xx, xy, yy, xh, xl, yh, yl, span(n, 5));
     for (row, sum) in products.iter().zip(sums) {
         horizontal_binomial(row, sum, n, 7);
     }
