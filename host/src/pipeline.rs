@@ -44,6 +44,9 @@ pub struct Compute {
     lambda: f64,
     tile: Option<TileSize>,
     fixed: Option<(Params, Scaling)>,
+    /// Where the pipeline's tests see whether two workers compute at once.
+    #[cfg(test)]
+    overlap: Option<std::sync::Arc<tests::Overlap>>,
 }
 
 impl Compute {
@@ -63,6 +66,8 @@ impl Compute {
             lambda,
             tile,
             fixed: None,
+            #[cfg(test)]
+            overlap: None,
         };
         match engine {
             EngineKind::Float => {
@@ -506,11 +511,19 @@ impl Worker<'_> {
         stop: &AtomicBool,
         buffers: &Buffers,
     ) {
-        // The lock is held only while waiting for the next job.
-        while let Ok(job) = jobs.lock().expect("no worker panics holding it").recv() {
+        loop {
+            // The lock is held only while waiting for the next job: a guard
+            // in a `while let` condition would live through the whole body
+            // and keep every other worker waiting.
+            let next = jobs.lock().expect("no worker panics holding it").recv();
+            let Ok(job) = next else {
+                return;
+            };
             if stop.load(Ordering::SeqCst) {
                 continue;
             }
+            #[cfg(test)]
+            let _inside = self.compute.overlap.as_ref().map(|o| o.enter());
             let msg = self.job_message(&job, buffers.payloads.take().unwrap_or_default());
             // The last of the two jobs (and the reader) to use a frame hands it back.
             for frame in [job.prev, job.next] {
@@ -808,6 +821,84 @@ mod tests {
             &mut || calls += 1,
         );
         (result, bytes, calls)
+    }
+
+    /// Workers inside a job at once: `enter` waits (up to two seconds, once)
+    /// for a second worker to be inside too.
+    #[derive(Debug, Default)]
+    pub(super) struct Overlap {
+        inside: Mutex<(usize, bool)>,
+        changed: std::sync::Condvar,
+    }
+
+    impl Overlap {
+        pub(super) fn enter(&self) -> Inside<'_> {
+            let mut state = self.inside.lock().unwrap();
+            state.0 += 1;
+            state.1 |= state.0 >= 2;
+            self.changed.notify_all();
+            let timeout = std::time::Duration::from_secs(2);
+            let (state, _) = self
+                .changed
+                .wait_timeout_while(state, timeout, |(_, met)| !*met)
+                .unwrap();
+            drop(state);
+            Inside(self)
+        }
+
+        fn met(&self) -> bool {
+            self.inside.lock().unwrap().1
+        }
+    }
+
+    pub(super) struct Inside<'a>(&'a Overlap);
+
+    impl Drop for Inside<'_> {
+        fn drop(&mut self) {
+            self.0.inside.lock().unwrap().0 -= 1;
+        }
+    }
+
+    /// Two workers compute two pairs at the same time (a worker that kept
+    /// the job queue's lock while computing would serialise them).
+    #[test]
+    fn workers_compute_pairs_at_the_same_time() {
+        let mut compute = Compute::new(
+            EngineKind::Fixed,
+            ScaleArg::MinMax,
+            IntensityScale::PER_255,
+            1e-4,
+            None,
+        )
+        .unwrap();
+        let overlap = std::sync::Arc::new(Overlap::default());
+        compute.overlap = Some(overlap.clone());
+        let mut bytes = Vec::new();
+        let summary = process(
+            &mut Frames {
+                next: 0,
+                n: 6,
+                fail: false,
+            },
+            &compute,
+            Destination::Stream {
+                spec: &OutputSpec::default(),
+                format: StreamFormat::Rgb24,
+                writer: &mut bytes,
+            },
+            Options {
+                threads: 2,
+                keep_count: false,
+                max_frames: None,
+            },
+            &mut || {},
+        )
+        .unwrap();
+        assert_eq!(summary.results, 5);
+        assert!(
+            overlap.met(),
+            "no two workers were ever inside a job at once"
+        );
     }
 
     #[test]
