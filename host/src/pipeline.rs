@@ -163,7 +163,7 @@ impl Compute {
 /// A tile the core refuses is the fault of `--tile`.
 fn tile_error(e: HostError) -> HostError {
     match e {
-        HostError::Core(c @ (CoreError::TileOutOfFrame | CoreError::TileTooWide { .. })) => {
+        HostError::Core(c @ CoreError::TileOutOfFrame) => {
             HostError::invalid("--tile", c.to_string())
         }
         e => e,
@@ -788,26 +788,42 @@ mod tests {
         }
     }
 
-    fn stream(
-        n: usize,
-        fail: bool,
-        threads: usize,
-        keep_count: bool,
-    ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
-        let compute = Compute::new(
+    /// The fixed engine at `run`'s defaults.
+    fn fixed_compute() -> Compute {
+        Compute::new(
             EngineKind::Fixed,
             ScaleArg::MinMax,
             IntensityScale::PER_255,
             1e-4,
             None,
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    fn stream(
+        n: usize,
+        fail: bool,
+        threads: usize,
+        keep_count: bool,
+    ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
+        stream_with(&fixed_compute(), n, fail, threads, keep_count)
+    }
+
+    /// `n` frames through `compute` into an RGB stream: the summary, the
+    /// bytes and the number of outputs reported.
+    fn stream_with(
+        compute: &Compute,
+        n: usize,
+        fail: bool,
+        threads: usize,
+        keep_count: bool,
+    ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
         let spec = OutputSpec::default();
         let mut bytes = Vec::new();
         let mut calls = 0;
         let result = process(
             &mut Frames { next: 0, n, fail },
-            &compute,
+            compute,
             Destination::Stream {
                 spec: &spec,
                 format: StreamFormat::Rgb24,
@@ -863,38 +879,11 @@ mod tests {
     /// the job queue's lock while computing would serialise them).
     #[test]
     fn workers_compute_pairs_at_the_same_time() {
-        let mut compute = Compute::new(
-            EngineKind::Fixed,
-            ScaleArg::MinMax,
-            IntensityScale::PER_255,
-            1e-4,
-            None,
-        )
-        .unwrap();
+        let mut compute = fixed_compute();
         let overlap = std::sync::Arc::new(Overlap::default());
         compute.overlap = Some(overlap.clone());
-        let mut bytes = Vec::new();
-        let summary = process(
-            &mut Frames {
-                next: 0,
-                n: 6,
-                fail: false,
-            },
-            &compute,
-            Destination::Stream {
-                spec: &OutputSpec::default(),
-                format: StreamFormat::Rgb24,
-                writer: &mut bytes,
-            },
-            Options {
-                threads: 2,
-                keep_count: false,
-                max_frames: None,
-            },
-            &mut || {},
-        )
-        .unwrap();
-        assert_eq!(summary.results, 5);
+        let (summary, _, _) = stream_with(&compute, 6, false, 2, false);
+        assert_eq!(summary.unwrap().results, 5);
         assert!(
             overlap.met(),
             "no two workers were ever inside a job at once"

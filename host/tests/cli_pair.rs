@@ -148,30 +148,9 @@ fn tiles_do_not_change_the_files() {
     let mut outputs = Vec::new();
     for tile in [None, Some("5x7"), Some("64x48"), Some("128x1")] {
         let out = tmp.path().join(tile.unwrap_or("strips"));
-        let mut args = args![
-            "pair",
-            dir.join("f0.pgm"),
-            dir.join("f1.pgm"),
-            "--out",
-            out,
-            "--scale",
-            "fixed:8,32"
-        ]
-        .to_vec();
-        if let Some(t) = tile {
-            args.extend(args!["--tile", t]);
-        }
-        let run = run(&args);
-        assert!(
-            run.status.success(),
-            "{tile:?}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let bytes: Vec<Vec<u8>> = files_in(&out)
-            .iter()
-            .map(|f| fs::read(out.join(f)).unwrap())
-            .collect();
-        outputs.push(bytes);
+        let (f0, f1) = (dir.join("f0.pgm"), dir.join("f1.pgm"));
+        let files = pair_files(&f0, &f1, &out, tile, &["--scale", "fixed:8,32"]);
+        outputs.push(files);
     }
     assert_eq!(outputs[0].len(), 5);
     assert!(
@@ -180,9 +159,17 @@ fn tiles_do_not_change_the_files() {
     );
 }
 
-/// The output files of `pair` on `(f0, f1)` with `--tile` (or strips).
-fn pair_files(f0: &Path, f1: &Path, out: &Path, tile: Option<&str>) -> Vec<(String, Vec<u8>)> {
+/// The output files of `pair` on `(f0, f1)` with `--tile` (or strips) and
+/// `extra` arguments, by name.
+fn pair_files(
+    f0: &Path,
+    f1: &Path,
+    out: &Path,
+    tile: Option<&str>,
+    extra: &[&str],
+) -> Vec<(String, Vec<u8>)> {
     let mut args = args!["pair", f0, f1, "--out", out].to_vec();
+    args.extend(extra.iter().map(OsString::from));
     if let Some(t) = tile {
         args.extend(args!["--tile", t]);
     }
@@ -247,11 +234,11 @@ fn any_tile_up_to_the_frame_gives_the_untiled_files() {
         let (f0, f1) = (tmp.path().join("f0.pgm"), tmp.path().join("f1.pgm"));
         write_textured(&f0, w, h, 0);
         write_textured(&f1, w, h, 1);
-        let untiled = pair_files(&f0, &f1, &tmp.path().join(format!("{w}x{h}")), None);
+        let untiled = pair_files(&f0, &f1, &tmp.path().join(format!("{w}x{h}")), None, &[]);
         assert_eq!(untiled.len(), 5);
         for tile in tiles {
             let out = tmp.path().join(format!("{w}x{h}-{tile}"));
-            let tiled = pair_files(&f0, &f1, &out, Some(&tile));
+            let tiled = pair_files(&f0, &f1, &out, Some(&tile), &[]);
             assert!(
                 tiled == untiled,
                 "{w}x{h} with --tile {tile} changed the files"
