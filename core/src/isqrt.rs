@@ -2,8 +2,9 @@
 //! `f64` root (x86-64, aarch64) it is that root's floor; elsewhere a table
 //! seed, two Newton steps on the reciprocal root (multiplies and shifts
 //! only) and a correction to the exact floor, about 20 operations where a
-//! bit-by-bit root takes over a hundred. Both are the exact floor, so every
-//! target gives the same bytes (the tests hold each to `u64::isqrt`).
+//! bit-by-bit root takes over a hundred. Both are the exact floor over the
+//! radicands the magnitudes have, so every target gives the same bytes (the
+//! tests hold each to `u64::isqrt`).
 
 /// `r0[k] ≈ 2³⁰ / √((k + ½) / 256)` for the top byte `k ∈ [64, 256)` of a
 /// normalised argument: a seed good to 8 bits (Q30, in `(2³⁰, 2³¹]`).
@@ -28,9 +29,19 @@ pub fn mul(a: u32, b: u32) -> u64 {
 /// of two components below 2²⁴ stay below 2⁴⁹.
 pub const ISQRT_MAX: u64 = (1 << 50) - 1;
 
-/// `⌊√n⌋`, exact for every `n ≤` [`ISQRT_MAX`] (larger `n` are cut to it).
+/// Smallest nonzero argument [`isqrt`] is exact for: the larger of the two
+/// components is raised to 24 bits (`solve::root_of_squares`), so a nonzero
+/// radicand is at least 2⁴⁶.
+pub const ISQRT_MIN: u64 = 1 << 46;
+
+/// `⌊√n⌋`, exact for `n = 0` and every `n` in [`ISQRT_MIN`]`..=`[`ISQRT_MAX`]
+/// (elsewhere some value, without a panic).
 #[inline]
 pub fn isqrt(n: u64) -> u32 {
+    debug_assert!(
+        n == 0 || (ISQRT_MIN..=ISQRT_MAX).contains(&n),
+        "radicand {n}"
+    );
     #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
     let r = isqrt_by_fpu(n);
     #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
@@ -74,7 +85,9 @@ fn sqrt(x: f64) -> f64 {
 }
 
 /// [`isqrt`] without a divide or an FPU. The correction is one step each
-/// way, without loops: no data-dependent branch but the one for zero.
+/// way, without loops: no data-dependent branch but the one for zero. The
+/// domain's two octaves normalise by a constant shift each (32-bit targets
+/// have no cheap 64-bit shift by a variable amount).
 #[inline]
 #[cfg_attr(
     any(target_arch = "x86_64", target_arch = "aarch64"),
@@ -82,13 +95,14 @@ fn sqrt(x: f64) -> f64 {
 )]
 pub fn isqrt_by_newton(n: u64) -> u32 {
     // Zero is the common case (still parts of a frame): skip the root.
-    if n < 4 {
-        return u32::from(n != 0);
+    if n == 0 {
+        return 0;
     }
     let n = n.min(ISQRT_MAX);
-    // m = n·4^j ∈ [2⁶², 2⁶⁴); a = m's top 32 bits, read as x = a/2³² ∈ [¼, 1).
-    let shift = n.leading_zeros() & !1;
-    let a = ((n << shift) >> 32) as u32;
+    // m = n·4^j ∈ [2⁶², 2⁶⁴) with 4^j = 2¹⁶ below 2⁴⁸ and 2¹⁴ from there;
+    // a = m's top 32 bits, read as x = a/2³² ∈ [¼, 1).
+    let upper = n >= 1 << 48;
+    let a = if upper { n >> 18 } else { n >> 16 } as u32;
     // r ≈ 2³⁰/√x in Q30 ∈ (2³⁰, 2³¹]. One Newton step r·(3 − x·r²)/2, all in
     // 32×32→64 products: r²/2³¹ ≤ 2³¹ (Q29), a·that/2³² ≈ x·r² ≤ 2³¹ (Q29),
     // r·(3·2²⁹ − t)/2³⁰ < 1.5·2³¹ < 2³². Each step squares the relative
@@ -101,7 +115,11 @@ pub fn isqrt_by_newton(n: u64) -> u32 {
     }
     // √m ≈ a·r/2³⁰, relative error below 2⁻²⁷ (also a's truncation, 2⁻³⁰), so
     // below ¼ absolute for √n < 2²⁵: within one of the floor either way.
-    let q = ((mul(a, r) >> 30) >> (shift / 2)) as u32;
+    let q = if upper {
+        mul(a, r) >> 37
+    } else {
+        mul(a, r) >> 38
+    } as u32;
     let q = q - u32::from(mul(q, q) > n);
     q + u32::from(mul(q + 1, q + 1) <= n)
 }
@@ -117,26 +135,33 @@ mod tests {
 
     #[test]
     fn exact_at_the_edges_and_beyond_the_domain() {
+        let octave = 1u64 << 48;
         for n in [
             0u64,
-            1,
-            2,
-            3,
-            4,
-            5,
-            8,
-            9,
-            15,
-            16,
-            17,
+            ISQRT_MIN,
+            ISQRT_MIN + 1,
+            octave - 1,
+            octave,
+            octave + 1,
             ISQRT_MAX - 1,
             ISQRT_MAX,
-        ]
-        .into_iter()
-        .chain([ISQRT_MAX + 1, 1 << 62, u64::MAX])
-        {
-            assert_eq!(isqrt(n), want(n), "{n}");
+            ISQRT_MAX + 1,
+            1 << 62,
+            u64::MAX,
+        ] {
             assert_eq!(isqrt_by_newton(n), want(n), "{n}");
+            if n <= ISQRT_MAX {
+                assert_eq!(isqrt(n), want(n), "{n}");
+            }
+        }
+    }
+
+    /// The FPU's root is exact below the domain too.
+    #[test]
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    fn fpu_root_is_exact_at_every_size() {
+        for n in (0..100_000).chain((0..64).map(|b| 1u64 << b)) {
+            assert_eq!(isqrt_by_fpu(n), want(n), "{n}");
         }
     }
 
@@ -144,8 +169,8 @@ mod tests {
     /// is one off would show.
     #[test]
     fn exact_on_both_sides_of_every_square() {
-        let last = ISQRT_MAX.isqrt();
-        let wrong = (1..=last)
+        let (first, last) = (ISQRT_MIN.isqrt(), ISQRT_MAX.isqrt());
+        let wrong = (first + 1..=last)
             .filter(|&r| {
                 let s = r * r;
                 [isqrt, isqrt_by_newton].iter().any(|root| {
@@ -159,15 +184,25 @@ mod tests {
     }
 
     #[test]
-    fn exact_on_random_values_of_every_size() {
+    fn exact_on_random_values_of_the_domain() {
         let mut s = 0x9E37_79B9_7F4A_7C15u64;
         for i in 0..2_000_000u64 {
             s ^= s << 13;
             s ^= s >> 7;
             s ^= s << 17;
-            let n = s >> (i % 64);
-            assert_eq!(isqrt(n), want(n), "{n}");
-            assert_eq!(isqrt_by_newton(n), want(n), "{n}");
+            let n = s >> (14 + i % 50);
+            if n == 0 || (ISQRT_MIN..=ISQRT_MAX).contains(&n) {
+                assert_eq!(isqrt(n), want(n), "{n}");
+                assert_eq!(isqrt_by_newton(n), want(n), "{n}");
+            }
+        }
+    }
+
+    /// Outside the domain: some value, never a panic.
+    #[test]
+    fn no_panic_below_the_domain() {
+        for n in (1..1000).chain([ISQRT_MIN - 1, 1 << 40]) {
+            let _ = isqrt_by_newton(n);
         }
     }
 }

@@ -45,23 +45,45 @@ pub const FLAT_RANGE_Q32: u64 = 4;
 /// Bounds: `x < 2³²` (a larger `x` is a byte of 255 whatever the gain), and
 /// `gain < 2³²`, so the product is one 32×32→64 multiply on every target.
 /// A zero gain maps everything to 0 (its offset makes every `x` 0).
+///
+/// Where 255 starts (`below_255`) is prepared once, so that 32-bit targets
+/// shift only the product's high word (no 64-bit shift by a variable
+/// amount, see [`Self::byte`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ByteScale {
     offset: u64,
     shift: u32,
     gain: u32,
+    /// Largest `m − offset` whose byte is below 255: `x` reaches the least
+    /// `x` that makes 255 (at most 2³²) above it. `u64::MAX`: never.
+    below_255: u64,
     frac: u32,
 }
 
 impl ByteScale {
+    #[inline(always)]
     fn new(offset: u64, shift: u32, gain: u32, frac: u32) -> Self {
         // Everything maps to 0: an offset no magnitude exceeds makes x = 0.
         let offset = if gain == 0 { u64::MAX } else { offset };
+        // ⌊(x·g + 2^(f−1)) / 2^f⌋ ≥ 255 ⇔ x·g ≥ 509 · 2^(f−1); frac ≤ 55
+        // (min–max: 32 bits of range + 23), so 509 · 2^54 < 2⁶³.
+        let saturate = match gain {
+            0 => 1 << 32,
+            _ => (509u64 << (frac - 1))
+                .div_ceil(u64::from(gain))
+                .min(1 << 32),
+        };
+        // x ≥ saturate ⇔ m − offset ≥ saturate · 2^shift (2⁶⁴ or more: never).
+        let below_255 = u64::try_from((u128::from(saturate) << shift) - 1).unwrap_or(u64::MAX);
+        // Below `saturate`, `x · 2^(32 − frac) < 509 · 2³¹ / gain ≤ 2³²` needs
+        // `gain ≥ 255`: min–max's gain is above 2³⁰, Fixed has frac = 32.
+        debug_assert!(gain == 0 || frac >= 32 || gain >= 255);
         Self {
             offset,
             shift,
             gain,
+            below_255,
             frac,
         }
     }
@@ -69,6 +91,7 @@ impl ByteScale {
     /// `Fixed(k)`: `m` cut to 2⁻¹⁶ px (`x = m >> 16 < 2³²`: magnitudes stay
     /// below 2¹⁶ px) times `k` in Q16.16 (`frac = 32`), so the byte is
     /// `min(255, ⌊m·k + ½⌋)` except within `k · 2⁻¹⁶` of a tie.
+    #[inline(always)]
     pub fn fixed(k: U16F16) -> Self {
         Self::new(0, 16, k.to_bits(), 32)
     }
@@ -93,15 +116,24 @@ impl ByteScale {
         Self::new(lo, shift, gain, frac)
     }
 
-    /// The byte of magnitude `m`.
+    /// The byte of magnitude `m`: `⌊(x·g + 2^(f−1)) / 2^f⌋` from the
+    /// product's high word, so no 64-bit shift by a variable amount (which
+    /// 32-bit targets build from several instructions).
     #[inline(always)]
     pub fn byte(&self, m: U32F32) -> u8 {
-        let x = m.to_bits().saturating_sub(self.offset) >> self.shift;
-        let Ok(x) = u32::try_from(x) else {
+        let d = m.to_bits().saturating_sub(self.offset);
+        if d > self.below_255 {
             return 255;
-        };
-        let product = u64::from(x) * u64::from(self.gain);
-        (((product >> (self.frac - 1)) + 1) >> 1).min(255) as u8
+        }
+        let x = (d >> self.shift) as u32;
+        // With F = max(frac, 32), x is raised by 32 − min(frac, 32) bits;
+        // x < saturate ≤ 2³², and that raised x < 2³² (see `new`):
+        // ⌊(x·2^(F−frac)·g + 2^(F−1)) / 2^F⌋ = ⌊(x·g + 2^(f−1)) / 2^f⌋ ≤ 254,
+        // the sum below 509 · 2⁵⁴ + 2⁵⁴ < 2⁶⁴; only its high word is shifted.
+        let wide = self.frac.max(32);
+        let raised = x << (wide - self.frac);
+        let product = u64::from(raised) * u64::from(self.gain) + (1 << (wide - 1));
+        ((product >> 32) as u32 >> (wide - 32)) as u8
     }
 }
 
@@ -182,6 +214,54 @@ mod tests {
                 let m = U32F32::from_bits(bits);
                 let want = reference(m.to_num(), k);
                 assert!(scale.byte(m).abs_diff(want) <= 1, "k={k} m={m}");
+            }
+        }
+    }
+
+    /// The byte by its definition: a 64-bit shift by `frac`, an `x` of 2³²
+    /// or more 255 whatever the gain.
+    fn by_definition(scale: &ByteScale, m: U32F32) -> u8 {
+        let x = m.to_bits().saturating_sub(scale.offset) >> scale.shift;
+        let Ok(x) = u32::try_from(x) else {
+            return 255;
+        };
+        let product = u64::from(x) * u64::from(scale.gain);
+        (((product >> (scale.frac - 1)) + 1) >> 1).min(255) as u8
+    }
+
+    /// The high-word byte is the definition's for every scale the two
+    /// constructors make, at random magnitudes and around saturation.
+    #[test]
+    fn byte_is_the_definition() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        for case in 0..20_000 {
+            let scale = if case % 2 == 0 {
+                ByteScale::fixed(U16F16::from_bits(next() as u32 >> (next() % 32)))
+            } else {
+                let lo = next() >> (next() % 64);
+                let hi = lo.saturating_add(next() >> (next() % 64));
+                ByteScale::min_max(U32F32::from_bits(lo), U32F32::from_bits(hi))
+            };
+            let edge = scale.offset.wrapping_add(scale.below_255).wrapping_add(1);
+            let ms = [
+                next(),
+                next() >> (next() % 64),
+                scale.offset.wrapping_add(next() >> (next() % 64)),
+                edge,
+                edge.wrapping_sub(1),
+                edge.wrapping_sub(1 << scale.shift),
+                edge.wrapping_add(1 << scale.shift),
+                0,
+                u64::MAX,
+            ];
+            for m in ms.map(U32F32::from_bits) {
+                assert_eq!(scale.byte(m), by_definition(&scale, m), "{scale:?} m={m}");
             }
         }
     }
