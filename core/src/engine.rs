@@ -20,13 +20,10 @@ use crate::schedule::{
     PRODUCT_LAG, PRODUCT_RADIUS, PRODUCT_START, SUM_DEPTH, SUM_RADIUS, V_DEPTH, V_LAG, V_RADIUS,
     V_START,
 };
-use crate::solve::{
-    StructureSums, curl_free_magnitude_q32, curl_free_q16, divergence_free_magnitude_q32,
-    divergence_free_q16, solve,
-};
 use crate::stages::{
     CHANNELS, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
 };
+use crate::tail::{TailRows, tail_row};
 use crate::{Config, Error, Job, Tile};
 
 /// Everything the representation knows about one pixel.
@@ -530,62 +527,26 @@ impl Pass<'_> {
             vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
         }
         let fields = sink.reads_fields();
-        let [a, b, c, ph, pl, qh, ql] = rows.products.each_ref().map(|row| &row[..]);
-        let (vx, vy, luma) = (rows.v[0].row(o), rows.v[1].row(o), rows.p0.row(o));
         let width = n.saturating_sub(2 * HALO);
-        let columns = HALO..HALO + width;
-        let sums = a
-            .get(columns.clone())
-            .unwrap_or(&[])
-            .iter()
-            .zip(b.get(columns.clone()).unwrap_or(&[]))
-            .zip(c.get(columns.clone()).unwrap_or(&[]))
-            .zip(ph.get(columns.clone()).unwrap_or(&[]))
-            .zip(pl.get(columns.clone()).unwrap_or(&[]))
-            .zip(qh.get(columns.clone()).unwrap_or(&[]))
-            .zip(ql.get(columns.clone()).unwrap_or(&[]));
-        let pixels = vx
-            .get(columns.clone())
-            .unwrap_or(&[])
-            .iter()
-            .zip(vy.get(columns.clone()).unwrap_or(&[]))
-            .zip(luma.get(columns).unwrap_or(&[]));
-        for (out, (((((((&a, &b), &c), &ph), &pl), &qh), &ql), ((&vx, &vy), &luma))) in
-            rows.out.iter_mut().zip(sums.zip(pixels))
-        {
-            let solved = solve(
-                config,
-                StructureSums {
-                    a,
-                    b,
-                    c,
-                    p: [ph, pl],
-                    q: [qh, ql],
-                },
-            );
-            let v = [vx, vy];
-            let (v_c, v_d) = if fields {
-                (
-                    v.map(|v| curl_free_q16(config, v)),
-                    divergence_free_q16(config, &solved),
-                )
-            } else {
-                ([0; 2], [0; 2])
-            };
-            *out = FlowPixel {
-                v_c: v_c.map(I16F16::from_bits),
-                v_d: v_d.map(I16F16::from_bits),
-                m_c: U32F32::from_bits(curl_free_magnitude_q32(config, v)),
-                m_d: U32F32::from_bits(divergence_free_magnitude_q32(config, &solved)),
-                luma,
-            };
-        }
+        let tail_rows = TailRows {
+            sums: rows.products.each_ref().map(|row| from_first_output(row)),
+            v: [rows.v[0].row(o), rows.v[1].row(o)].map(from_first_output),
+            luma: from_first_output(rows.p0.row(o)),
+        };
+        let out = rows.out.get_mut(..width).unwrap_or(&mut []);
+        tail_row(config, fields, &tail_rows, out);
         let (y, x) = (
             (y_first + o as isize) as usize,
             (x_first + HALO as isize) as usize,
         );
         sink.row(y, x, rows.out.get(..width).unwrap_or(&[]));
     }
+}
+
+/// A window row from the first output column (`HALO`) on.
+#[inline(always)]
+fn from_first_output<T>(row: &[T]) -> &[T] {
+    row.get(HALO..).unwrap_or(&[])
 }
 
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the

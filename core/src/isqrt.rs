@@ -6,6 +6,9 @@
 //! radicands the magnitudes have, so every target gives the same bytes (the
 //! tests hold each to `u64::isqrt`).
 
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+use crate::fpu;
+
 /// `r0[k] ≈ 2³⁰ / √((k + ½) / 256)` for the top byte `k ∈ [64, 256)` of a
 /// normalised argument: a seed good to 8 bits (Q30, in `(2³⁰, 2³¹]`).
 const SEED: [u32; 256] = {
@@ -30,13 +33,14 @@ pub fn mul(a: u32, b: u32) -> u64 {
 pub const ISQRT_MAX: u64 = (1 << 50) - 1;
 
 /// Smallest nonzero argument [`isqrt`] is exact for: the larger of the two
-/// components is raised to 24 bits (`solve::root_of_squares`), so a nonzero
+/// components is raised to 24 bits (`solve::Squares::of`), so a nonzero
 /// radicand is at least 2⁴⁶.
 pub const ISQRT_MIN: u64 = 1 << 46;
 
 /// `⌊√n⌋`, exact for `n = 0` and every `n` in [`ISQRT_MIN`]`..=`[`ISQRT_MAX`]
 /// (elsewhere some value, without a panic).
-#[inline]
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline)]
 pub fn isqrt(n: u64) -> u32 {
     debug_assert!(
         n == 0 || (ISQRT_MIN..=ISQRT_MAX).contains(&n),
@@ -49,39 +53,17 @@ pub fn isqrt(n: u64) -> u32 {
     r
 }
 
-/// [`isqrt`] from the correctly rounded `f64` root. Exact: `n < 2⁵²` converts
-/// exactly, and with `k = ⌊√n⌋ < 2²⁶`, `√n ≤ √((k+1)² − 1) < k + 1 − 1/(2(k+1))`,
-/// more than half an ulp (`≤ 2⁻²⁸` below 2²⁶) under `k + 1`, so rounding
-/// cannot carry the root up to the next integer; the floor is `k`.
-#[inline]
+/// [`isqrt`] from the correctly rounded `f64` root, in the form a batch
+/// vectorises (`fpu`). `n < 2⁵²` enters exactly; with `k = ⌊√n⌋`,
+/// `k ≤ √n < k + 1` and both bounds are `f64` integers, so the rounded root
+/// lies in `[k, k + 1]` and its nearest integer is `k` or `k + 1`; one test
+/// (`r² > n`, `r ≤ 2²⁵`) takes the floor.
+#[inline(always)]
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 fn isqrt_by_fpu(n: u64) -> u32 {
-    sqrt(n.min(ISQRT_MAX) as f64) as u32
-}
-
-/// The correctly rounded `f64` root (`core` has no stable `sqrt`). On
-/// x86-64 through the SSE2 intrinsic, which the compiler encodes for the
-/// code around it (`vsqrtsd` inside the host's AVX2 pass): `libm`'s root is
-/// an inline-assembly legacy `sqrtsd`, and that, amid AVX code, made
-/// `reynoldsflow run` 5.5× slower per pair on this project's AMD EPYC
-/// (3.0 s against 0.55 s for 30 pairs at 640×480) although it ran fewer
-/// instructions; the multiply-only root instead takes 0.70 s. The
-/// intrinsics are `unsafe` only because they carry `#[target_feature]`.
-#[inline(always)]
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-fn sqrt(x: f64) -> f64 {
-    use core::arch::x86_64::{_mm_cvtsd_f64, _mm_set_sd, _mm_sqrt_pd};
-    // SAFETY: SSE2 is part of every x86-64 target (the baseline), and these
-    // intrinsics touch registers only.
-    unsafe { _mm_cvtsd_f64(_mm_sqrt_pd(_mm_set_sd(x))) }
-}
-
-/// The correctly rounded `f64` root: `libm`'s is the `fsqrt` instruction.
-#[inline(always)]
-#[cfg(target_arch = "aarch64")]
-fn sqrt(x: f64) -> f64 {
-    libm::sqrt(x)
+    let n = n.min(ISQRT_MAX);
+    let r = fpu::nearest(fpu::sqrt(fpu::exact(n))) as u32;
+    r - u32::from(mul(r, r) > n)
 }
 
 /// [`isqrt`] without a divide or an FPU. The correction is one step each

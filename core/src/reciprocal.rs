@@ -1,14 +1,17 @@
-//! An exact reciprocal without a divide: `⌊(2⁶³ − 1) / d⌋` for a normalised
-//! 32-bit `d`, from a table seed, two Newton steps (multiplies and shifts)
-//! and a correction to the exact floor. A 64-bit divide is a library call
-//! of a hundred-odd instructions on Cortex-M and RV32; this is about twenty.
+//! An exact reciprocal: `⌊(2⁶³ − 1) / d⌋` for a normalised 32-bit `d`. Where
+//! the FPU divides, from its `f64` quotient; elsewhere without a divide,
+//! from a table seed, two Newton steps (multiplies and shifts) and a
+//! correction to the exact floor. A 64-bit divide is a library call of a
+//! hundred-odd instructions on Cortex-M and RV32; this is about twenty.
 
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+use crate::fpu;
 use crate::isqrt::mul;
 
 /// `2⁴⁰ / (2k + 1)` for the top byte `k ∈ [128, 256)` of `d`: `2⁶³ / d` at
 /// the middle of the byte's interval, good to 8 bits.
 #[cfg_attr(
-    target_arch = "x86_64",
+    any(target_arch = "x86_64", target_arch = "aarch64"),
     allow(dead_code, reason = "tested on every host")
 )]
 const SEED: [u32; 128] = {
@@ -22,22 +25,39 @@ const SEED: [u32; 128] = {
 };
 
 /// `⌊(2⁶³ − 1) / d⌋` for `d ∈ [2³¹, 2³²)`, in `[2³¹, 2³²)`; other `d` are
-/// raised to 2³¹ (the caller normalises). x86-64 divides in hardware in a
-/// few cycles and gets the same floor; every other target takes
-/// [`reciprocal_by_newton`].
-#[inline]
+/// raised to 2³¹ (the caller normalises). Where the FPU divides `f64`
+/// (x86-64, aarch64) from its quotient ([`reciprocal_by_fpu`], which a
+/// batch vectorises); every other target takes [`reciprocal_by_newton`].
+/// Both are the exact floor.
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn reciprocal(d: u32) -> u64 {
-    #[cfg(target_arch = "x86_64")]
-    let r = (u64::MAX >> 1) / u64::from(d.max(1 << 31));
-    #[cfg(not(target_arch = "x86_64"))]
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    let r = reciprocal_by_fpu(d);
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
     let r = reciprocal_by_newton(d);
     r
+}
+
+/// [`reciprocal`] from the correctly rounded quotient `q = 2⁶³ / d` (both
+/// exact in `f64`). With `T = ⌊(2⁶³ − 1)/d⌋ ≤ 2³² − 1`, the real quotient
+/// is `(2⁶³ − 1)/d + 1/d`, in `[T, T + 1 + 2⁻³¹)`; rounding keeps `q ≥ T`
+/// (an `f64` integer) and below `T + 1.5`, so its nearest integer, capped
+/// at `2³² − 1 ≥ T`, is `T` or `T + 1`, and one test (`r·d > 2⁶³ − 1`,
+/// below 2⁶⁴) takes the floor.
+#[inline(always)]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+pub fn reciprocal_by_fpu(d: u32) -> u64 {
+    let d = d.max(1 << 31);
+    let q = 9_223_372_036_854_775_808.0 / fpu::exact(u64::from(d));
+    let r = fpu::nearest(q).min(u64::from(u32::MAX)) as u32;
+    u64::from(r - u32::from(mul(r, d) > u64::MAX >> 1))
 }
 
 /// [`reciprocal`] without a divide.
 #[inline]
 #[cfg_attr(
-    target_arch = "x86_64",
+    any(target_arch = "x86_64", target_arch = "aarch64"),
     allow(dead_code, reason = "tested on every host")
 )]
 pub fn reciprocal_by_newton(d: u32) -> u64 {
@@ -65,14 +85,17 @@ pub fn reciprocal_by_newton(d: u32) -> u64 {
 mod tests {
     use super::*;
 
-    /// All 2³¹ normalised divisors (6 s in release):
+    /// Both forms this host has (the FPU's where it has one).
+    const FORMS: [fn(u32) -> u64; 2] = [reciprocal_by_newton, reciprocal];
+
+    /// All 2³¹ normalised divisors (25 s per form in release):
     /// `cargo test -p reynoldsflow-core --release -- --ignored every_divisor`.
     #[test]
     #[ignore = "exhaustive: seconds in release, minutes in debug"]
     fn exact_for_every_divisor() {
         let limit = u64::MAX >> 1;
         let wrong = (1u64 << 31..1 << 32)
-            .filter(|&d| reciprocal_by_newton(d as u32) != limit / d)
+            .filter(|&d| FORMS.iter().any(|form| form(d as u32) != limit / d))
             .count();
         assert_eq!(wrong, 0);
     }
@@ -85,7 +108,9 @@ mod tests {
                 .step_by(4093)
                 .chain([1 << 31, (1 << 31) + 1, u32::MAX as u64])
         {
-            assert_eq!(reciprocal_by_newton(d as u32), limit / d, "{d}");
+            for form in FORMS {
+                assert_eq!(form(d as u32), limit / d, "{d}");
+            }
         }
         let mut s = 0x1234_5678u64;
         for _ in 0..1_000_000 {
@@ -93,7 +118,9 @@ mod tests {
             s ^= s >> 7;
             s ^= s << 17;
             let d = (s >> 32) | 1 << 31;
-            assert_eq!(reciprocal_by_newton(d as u32), limit / d, "{d}");
+            for form in FORMS {
+                assert_eq!(form(d as u32), limit / d, "{d}");
+            }
         }
     }
 }

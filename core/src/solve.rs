@@ -27,8 +27,7 @@
 //! before the sums is `Dn′` (see `stages`).
 
 use crate::Config;
-use crate::isqrt::{isqrt, mul};
-use crate::reciprocal::reciprocal;
+use crate::isqrt::mul;
 
 /// Fields saturate at ±(2³¹ − 1) in Q16.16 (±32 768 px), so they fit `I16F16`.
 pub const FIELD_MAX_Q16: u64 = i32::MAX as u64;
@@ -71,25 +70,53 @@ pub fn curl_free_q16(config: &Config, v: i32) -> i32 {
     signed(v < 0, scaled(prod, -(config.c.exp as i32), FIELD_MAX_Q16))
 }
 
-/// `√(x² + y²) = r · 2^μ`: both cut (or raised) by one shift to 24 bits,
-/// `r = ⌊√(x′² + y′²)⌋ ∈ [2²³, 2^24.5)` (0 for the zero vector), the
-/// radicand below 2⁴⁹. Relative error below 2⁻²² (truncation and floor).
-#[inline(always)]
-pub fn root_of_squares(x: u64, y: u64) -> (u32, i32) {
-    // `& 63`: the zero vector shifts by 0 and stays 0.
-    let lz = (x | y).leading_zeros() & 63;
-    let (x, y) = (((x << lz) >> 40) as u32, ((y << lz) >> 40) as u32);
-    (isqrt(mul(x, x) + mul(y, y)), 64 - lz as i32 - 24)
+/// `x² + y²` prepared for its root, `√(x² + y²) = ⌊√radicand⌋ · 2^μ`:
+/// both cut (or raised) by one shift to 24 bits, so the root
+/// `r ∈ [2²³, 2^24.5)` (0 for the zero vector) and the radicand lies in
+/// `{0} ∪ [2⁴⁶, 2⁵⁰)`, the domain of [`isqrt`](crate::isqrt::isqrt).
+/// Relative error of `r · 2^μ` below 2⁻²² (truncation and floor).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Squares {
+    /// `x′² + y′²`.
+    pub radicand: u64,
+    /// The shift `μ` that undoes the cut.
+    pub mu: i32,
 }
 
-/// `|v_c|` in Q32.32 bits: `r · 2^μ · s / 768` with `r · c.mant < 2⁵⁷`.
+impl Squares {
+    /// The squares of `(x, y)`.
+    #[inline(always)]
+    pub fn of(x: u64, y: u64) -> Self {
+        // `& 63`: the zero vector shifts by 0 and stays 0.
+        let lz = (x | y).leading_zeros() & 63;
+        let (x, y) = (((x << lz) >> 40) as u32, ((y << lz) >> 40) as u32);
+        Self {
+            radicand: mul(x, x) + mul(y, y),
+            mu: 64 - lz as i32 - 24,
+        }
+    }
+
+    /// Of `V` (for `|v_c|`).
+    #[inline(always)]
+    pub fn curl_free(v: [i32; 2]) -> Self {
+        Self::of(
+            u64::from(v[0].unsigned_abs()),
+            u64::from(v[1].unsigned_abs()),
+        )
+    }
+
+    /// Of the numerators `N` (for `|v_d|`).
+    #[inline(always)]
+    pub fn divergence_free(n: [i64; 2]) -> Self {
+        Self::of(n[0].unsigned_abs(), n[1].unsigned_abs())
+    }
+}
+
+/// `|v_c|` in Q32.32 bits from the root `r = ⌊√radicand⌋` of its
+/// [`Squares::curl_free`]: `r · 2^μ · s / 768` with `r · c.mant < 2⁵⁷`.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn curl_free_magnitude_q32(config: &Config, v: [i32; 2]) -> u64 {
-    let (r, mu) = root_of_squares(
-        u64::from(v[0].unsigned_abs()),
-        u64::from(v[1].unsigned_abs()),
-    );
+pub fn curl_free_magnitude_q32(config: &Config, r: u32, mu: i32) -> u64 {
     // r·2^μ · c.mant·2^(−c.exp) · 2⁻¹⁶ px, times 2³² for Q32.32.
     scaled(
         mul(r, config.c.mant),
@@ -115,15 +142,18 @@ pub struct StructureSums {
     pub q: [i32; 2],
 }
 
-/// The solve of one pixel reduced to `v_d = n · rd · 2^exp · s / 192`
-/// pixels: the numerators, the reciprocal of the determinant and one
-/// exponent shared by both components.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The solve of one pixel up to its one division, `v_d = n · rd · 2^exp ·
+/// s / 192` pixels with `rd = ⌊(2⁶³ − 1) / det32⌋`
+/// ([`reciprocal`](crate::reciprocal::reciprocal)): the numerators, the
+/// determinant's top 32 bits and one exponent shared by both components.
+/// The reciprocal is left to the caller, which takes a batch of them side
+/// by side (`tail.rs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Solved {
     /// `N = (c4·P′ − b4·Q′, a4·Q′ − b4·P′)`, `|N| < 2⁶³`.
     pub n: [i64; 2],
-    /// `⌊(2⁶³ − 1) / top32(det)⌋ ∈ [2³¹, 2³²)`.
-    pub rd: u32,
+    /// `top32(det) ∈ [2³¹, 2³²)`.
+    pub det32: u32,
     /// `τ + σ − 31 − bitlen(det)`.
     pub exp: i32,
 }
@@ -145,54 +175,81 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
     let join = |[hi, lo]: [i32; 2]| (i64::from(hi) << 14) + i64::from(lo);
     let (p, q) = (join(s.p), join(s.q));
     let tau = (bit_length(p.unsigned_abs() | q.unsigned_abs()) - 31).max(0) as u32;
-    // Toward zero, so the solve stays odd in (p, q).
+    // Toward zero, so the solve stays odd in (p, q); `|P′|, |Q′| < 2³¹`, so
+    // the products below are 32×32 → 64 (which targets and vectors have).
     let cut = |v: i64| -> i64 {
-        let mag = (v.unsigned_abs() >> tau) as i64;
-        if v < 0 { -mag } else { mag }
+        let mag = (v.unsigned_abs() >> tau) as i32;
+        i64::from(if v < 0 { -mag } else { mag })
     };
     let (p, q) = (cut(p), cut(q));
     // det's top 32 bits; det ≥ Λ4² ≥ 1, so the shift is below 64.
     let d32 = (det << det.leading_zeros()) >> 32;
     Solved {
         n: [c4 * p - b4 * q, a4 * q - b4 * p],
-        rd: reciprocal(d32 as u32) as u32,
+        det32: d32 as u32,
         exp: tau as i32 + config.dn_shift as i32 - 31 - bit_length(det),
     }
 }
 
-/// `v_d` (x, y) in Q16.16 bits, to nearest, saturating at ±[`FIELD_MAX_Q16`].
-/// Each numerator normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · rd < 2⁶³`, its
+/// `v_d` (x, y) in Q16.16 bits, to nearest, saturating at ±[`FIELD_MAX_Q16`],
+/// with `rd = reciprocal(solved.det32)`. Each numerator normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · rd < 2⁶³`, its
 /// top 31 bits times `k.mant < 2³²` stay below 2⁶³.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn divergence_free_q16(config: &Config, solved: &Solved) -> [i32; 2] {
+pub fn divergence_free_q16(config: &Config, solved: &Solved, rd: u32) -> [i32; 2] {
     solved.n.map(|n| {
         let mag = n.unsigned_abs();
         let lz = mag.leading_zeros() & 63;
         let n31 = ((mag << lz) >> 33) as u32;
-        let m1 = (mul(n31, solved.rd) >> 32) as u32;
+        let m1 = (mul(n31, rd) >> 32) as u32;
         // n = n31·2^(b−31); n31·rd ≈ m1·2³²; times 2^exp · k.mant·2^(−k.exp) · 2¹⁶.
         let shift = (64 - lz as i32) + 17 + solved.exp - config.k.exp as i32;
         signed(n < 0, scaled(mul(m1, config.k.mant), shift, FIELD_MAX_Q16))
     })
 }
 
-/// `|v_d|` in Q32.32 bits, from the numerators before any rounding.
-/// `r · rd < 2^56.5`, cut to `m32 < 2^31.5`; `m32 · k.mant < 2^63.5`.
+/// `|v_d|` in Q32.32 bits, from the numerators before any rounding: `r`
+/// the root of their [`Squares::divergence_free`] (shift `mu`), `rd =
+/// reciprocal(solved.det32)`. `r · rd < 2^56.5`, cut to `m32 < 2^31.5`;
+/// `m32 · k.mant < 2^63.5`.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn divergence_free_magnitude_q32(config: &Config, solved: &Solved) -> u64 {
-    let [x, y] = solved.n.map(i64::unsigned_abs);
-    let (r, mu) = root_of_squares(x, y);
-    let m32 = (mul(r, solved.rd) >> 25) as u32;
+pub fn divergence_free_magnitude_q32(config: &Config, exp: i32, rd: u32, r: u32, mu: i32) -> u64 {
+    let m32 = (mul(r, rd) >> 25) as u32;
     // r·2^μ·rd ≈ m32·2^(25+μ); times 2^exp · k.mant·2^(−k.exp) · 2³².
-    let shift = 25 + mu + solved.exp - config.k.exp as i32 + 32;
+    let shift = 25 + mu + exp - config.k.exp as i32 + 32;
     scaled(mul(m32, config.k.mant), shift, MAGNITUDE_MAX_Q32)
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use crate::isqrt::isqrt;
+    use crate::reciprocal::reciprocal;
+
+    /// `√(x² + y²) = r · 2^μ` (see [`Squares`]).
+    fn root_of_squares(x: u64, y: u64) -> (u32, i32) {
+        let squares = Squares::of(x, y);
+        (isqrt(squares.radicand), squares.mu)
+    }
+
+    /// `v_d` in Q16.16 of one pixel, its division taken.
+    fn v_d(cfg: &Config, solved: &Solved) -> [i32; 2] {
+        divergence_free_q16(cfg, solved, reciprocal(solved.det32) as u32)
+    }
+
+    /// `|v_d|` in Q32.32 of one pixel, its division and root taken.
+    fn m_d(cfg: &Config, solved: &Solved) -> u64 {
+        let squares = Squares::divergence_free(solved.n);
+        let rd = reciprocal(solved.det32) as u32;
+        divergence_free_magnitude_q32(cfg, solved.exp, rd, isqrt(squares.radicand), squares.mu)
+    }
+
+    /// `|v_c|` in Q32.32 of one pixel, its root taken.
+    fn m_c(cfg: &Config, v: [i32; 2]) -> u64 {
+        let squares = Squares::curl_free(v);
+        curl_free_magnitude_q32(cfg, isqrt(squares.radicand), squares.mu)
+    }
     use crate::{IntensityScale, Params};
     use fixed::types::U32F32;
 
@@ -229,14 +286,14 @@ mod tests {
     /// `|v|` in Q16 steps.
     fn errors(cfg: &Config, s: StructureSums) -> (f64, f64, f64) {
         let solved = solve(cfg, s);
-        let got = divergence_free_q16(cfg, &solved);
+        let got = v_d(cfg, &solved);
         let want = oracle(cfg, s);
         let limit = FIELD_MAX_Q16 as f64;
         let err = got.iter().zip(want).fold(0.0f64, |e, (g, w)| {
             e.max((f64::from(*g) - (w * 65536.0).clamp(-limit, limit)).abs())
         });
         let norm = want[0].hypot(want[1]);
-        let m = divergence_free_magnitude_q32(cfg, &solved) as f64 / 2f64.powi(32);
+        let m = m_d(cfg, &solved) as f64 / 2f64.powi(32);
         let m_err = if norm * 65536.0 < limit && norm > 0.0 {
             ((m - norm).abs() - 2f64.powi(-33)).max(0.0) / norm
         } else {
@@ -247,7 +304,7 @@ mod tests {
 
     /// Sums built from 25 pixels of gradients and residuals, as the engine
     /// builds them (so `b² ≤ ac` holds and the words stay in range).
-    fn pixel_sums(seed: &mut u64, gmax: i64, dmax: i64) -> StructureSums {
+    pub(crate) fn pixel_sums(seed: &mut u64, gmax: i64, dmax: i64) -> StructureSums {
         let g = [1i64, 4, 6, 4, 1];
         let mut next = |range: i64| {
             *seed ^= *seed << 13;
@@ -337,8 +394,8 @@ mod tests {
             q: s.q.map(|v| -v),
             ..s
         };
-        let [x, y] = divergence_free_q16(&cfg, &solve(&cfg, s));
-        assert_eq!(divergence_free_q16(&cfg, &solve(&cfg, neg)), [-x, -y]);
+        let [x, y] = v_d(&cfg, &solve(&cfg, s));
+        assert_eq!(v_d(&cfg, &solve(&cfg, neg)), [-x, -y]);
         assert!(x != 0 && y != 0);
     }
 
@@ -355,7 +412,7 @@ mod tests {
     fn magnitudes_are_the_norm_to_2e21() {
         let cfg = config();
         let unit = 2f64.powi(32) / 195_840.0;
-        assert_eq!(curl_free_magnitude_q32(&cfg, [0, 0]), 0);
+        assert_eq!(m_c(&cfg, [0, 0]), 0);
         let mut s = 12345u64;
         for case in 0..100_000 {
             s ^= s << 13;
@@ -364,7 +421,7 @@ mod tests {
             let x = (s as i32 >> (case % 23 + 9)).clamp(-6_854_400, 6_854_400);
             let y = ((s >> 32) as i32 >> (case % 17 + 9)).clamp(-6_854_400, 6_854_400);
             let want = f64::from(x).hypot(f64::from(y)) * unit;
-            let got = curl_free_magnitude_q32(&cfg, [x, y]) as f64;
+            let got = m_c(&cfg, [x, y]) as f64;
             assert!((got - want).abs() <= want * 2f64.powi(-21) + 0.5, "{x} {y}");
         }
     }

@@ -5,10 +5,12 @@
 //! callgrind attributes the pass to the stages as the engine runs them.
 //!
 //! ```text
-//! stage_profile [--size WxH] [--reps N]   # the pass N times: run under callgrind
-//! stage_profile --time [--size WxH]       # ns/px of the pass, JSON lines
+//! stage_profile [--size WxH] [--reps N] [--best]  # the pass N times: run under callgrind
+//! stage_profile --time [--size WxH] [--best]      # ns/px of the pass, JSON lines
 //! stage_profile --digest                  # hash of every output, all sizes
 //! ```
+//! The pass is the baseline compilation unless `--best`: then the one the
+//! CLI runs (`dispatch`, AVX2 where the CPU has it).
 //! `--digest` prints an FNV-1a hash of every `FlowPixel` and of the
 //! min–max representation of the textured pair at each bench size: two
 //! builds (e.g. before and after an optimisation of the core) must print
@@ -26,6 +28,7 @@ use reynoldsflow_core::{
 
 mod common;
 use common::{SIZES, moving_pair};
+use reynoldsflow_host::dispatch::{self, Isa, Pass};
 use reynoldsflow_host::fixed_engine::{HostEngine, STRIP_WIDTH};
 
 const FIXED: Scaling = Scaling::Fixed {
@@ -36,8 +39,9 @@ const FIXED: Scaling = Scaling::Fixed {
 /// The whole engine over the frame: `represent`, `Fixed` gains (one pass),
 /// strips of the host engine.
 #[inline(never)]
-fn engine_pass(engine: &mut SliceEngine<'_>, job: &Job<'_>, rgb: &mut [u8]) {
-    represent(engine, job, FIXED, rgb, ()).unwrap();
+fn engine_pass(isa: Isa, engine: &mut SliceEngine<'_>, job: &Job<'_>, rgb: &mut [u8]) {
+    let pass = Pass::Represent(FIXED, rgb);
+    dispatch::run(isa, engine, job.plan(), job.frames(), pass, &mut ()).unwrap();
 }
 
 /// FNV-1a over every field of every pixel, in the order the sink sees them.
@@ -97,6 +101,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     let (mut w, mut h, mut reps, mut timing) = (640usize, 480usize, 1usize, false);
+    let mut isa = Isa::Portable;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -107,6 +112,7 @@ fn main() {
             }
             "--reps" => reps = args.next().and_then(|r| r.parse().ok()).expect("--reps N"),
             "--time" => timing = true,
+            "--best" => isa = Isa::Best,
             "--digest" => return digests(),
             _ => {} // cargo bench's own flags
         }
@@ -122,7 +128,7 @@ fn main() {
     let mut rgb = vec![0u8; 3 * w * h];
     if !timing {
         for _ in 0..reps {
-            engine_pass(&mut engine, &job, &mut rgb);
+            engine_pass(isa, &mut engine, &job, &mut rgb);
         }
         black_box(&rgb);
         println!("stage_profile {w}x{h}: {reps} engine pass(es)");
@@ -132,7 +138,7 @@ fn main() {
     let times: Vec<f64> = (0..15)
         .map(|_| {
             let t = Instant::now();
-            engine_pass(&mut engine, &job, &mut rgb);
+            engine_pass(isa, &mut engine, &job, &mut rgb);
             t.elapsed().as_secs_f64() * 1e9 / px
         })
         .collect();
