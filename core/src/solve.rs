@@ -192,8 +192,9 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
 }
 
 /// `v_d` (x, y) in Q16.16 bits, to nearest, saturating at ±[`FIELD_MAX_Q16`],
-/// with `rd = reciprocal(solved.det32)`. Each numerator normalised to `n31 ∈ [2³⁰, 2³¹)`; `n31 · rd < 2⁶³`, its
-/// top 31 bits times `k.mant < 2³²` stay below 2⁶³.
+/// with `rd = reciprocal(solved.det32)`. Each numerator normalised to
+/// `n31 ∈ [2³⁰, 2³¹)`; `n31 · rd < 2⁶³`, its top 31 bits times
+/// `k.mant < 2³²` stay below 2⁶³.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn divergence_free_q16(config: &Config, solved: &Solved, rd: u32) -> [i32; 2] {
