@@ -31,7 +31,7 @@ const SEED: [u32; 128] = {
 /// Both are the exact floor.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn reciprocal(d: u32) -> u64 {
+pub fn reciprocal(d: u32) -> u32 {
     #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
     let r = reciprocal_by_fpu(d);
     #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
@@ -47,11 +47,11 @@ pub fn reciprocal(d: u32) -> u64 {
 /// below 2⁶⁴) takes the floor.
 #[inline(always)]
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
-pub fn reciprocal_by_fpu(d: u32) -> u64 {
+pub fn reciprocal_by_fpu(d: u32) -> u32 {
     let d = d.max(1 << 31);
     let q = 9_223_372_036_854_775_808.0 / fpu::exact(u64::from(d));
     let r = fpu::nearest(q).min(u64::from(u32::MAX)) as u32;
-    u64::from(r - u32::from(mul(r, d) > u64::MAX >> 1))
+    r - u32::from(mul(r, d) > u64::MAX >> 1)
 }
 
 /// [`reciprocal`] without a divide.
@@ -60,7 +60,7 @@ pub fn reciprocal_by_fpu(d: u32) -> u64 {
     any(target_arch = "x86_64", target_arch = "aarch64"),
     allow(dead_code, reason = "tested on every host")
 )]
-pub fn reciprocal_by_newton(d: u32) -> u64 {
+pub fn reciprocal_by_newton(d: u32) -> u32 {
     let d = d.max(1 << 31);
     let mut y = SEED[((d >> 24) as usize) % 128];
     // y ≈ 2⁶³/d < 2³² with relative error ε: err = 2⁶³ − d·y ≈ 2⁶³·ε (|·| < 2⁵⁶
@@ -78,7 +78,7 @@ pub fn reciprocal_by_newton(d: u32) -> u64 {
     y -= u32::from(mul(d, y) > limit);
     y += u32::from(mul(d, y) + u64::from(d) <= limit);
     y += u32::from(mul(d, y) + u64::from(d) <= limit);
-    u64::from(y)
+    y
 }
 
 #[cfg(test)]
@@ -86,7 +86,7 @@ mod tests {
     use super::*;
 
     /// Both forms this host has (the FPU's where it has one).
-    const FORMS: [fn(u32) -> u64; 2] = [reciprocal_by_newton, reciprocal];
+    const FORMS: [fn(u32) -> u32; 2] = [reciprocal_by_newton, reciprocal];
 
     /// All 2³¹ normalised divisors (25 s per form in release):
     /// `cargo test -p reynoldsflow-core --release -- --ignored every_divisor`.
@@ -95,7 +95,11 @@ mod tests {
     fn exact_for_every_divisor() {
         let limit = u64::MAX >> 1;
         let wrong = (1u64 << 31..1 << 32)
-            .filter(|&d| FORMS.iter().any(|form| form(d as u32) != limit / d))
+            .filter(|&d| {
+                FORMS
+                    .iter()
+                    .any(|form| u64::from(form(d as u32)) != limit / d)
+            })
             .count();
         assert_eq!(wrong, 0);
     }
@@ -109,7 +113,7 @@ mod tests {
                 .chain([1 << 31, (1 << 31) + 1, u32::MAX as u64])
         {
             for form in FORMS {
-                assert_eq!(form(d as u32), limit / d, "{d}");
+                assert_eq!(u64::from(form(d as u32)), limit / d, "{d}");
             }
         }
         let mut s = 0x1234_5678u64;
@@ -119,7 +123,7 @@ mod tests {
             s ^= s << 17;
             let d = (s >> 32) | 1 << 31;
             for form in FORMS {
-                assert_eq!(form(d as u32), limit / d, "{d}");
+                assert_eq!(u64::from(form(d as u32)), limit / d, "{d}");
             }
         }
     }

@@ -236,13 +236,13 @@ pub(crate) mod tests {
 
     /// `v_d` in Q16.16 of one pixel, its division taken.
     fn v_d(cfg: &Config, solved: &Solved) -> [i32; 2] {
-        divergence_free_q16(cfg, solved, reciprocal(solved.det32) as u32)
+        divergence_free_q16(cfg, solved, reciprocal(solved.det32))
     }
 
     /// `|v_d|` in Q32.32 of one pixel, its division and root taken.
     fn m_d(cfg: &Config, solved: &Solved) -> u64 {
         let squares = Squares::divergence_free(solved.n);
-        let rd = reciprocal(solved.det32) as u32;
+        let rd = reciprocal(solved.det32);
         divergence_free_magnitude_q32(cfg, solved.exp, rd, isqrt(squares.radicand), squares.mu)
     }
 

@@ -65,8 +65,7 @@ fn magnitudes(config: &Config, sums: [i32; 7], v: [i32; 2]) -> (Solved, u32, [u6
         },
     );
     let (d, cf) = (Squares::divergence_free(solved.n), Squares::curl_free(v));
-    // rd ∈ [2³¹, 2³²): the cast keeps every bit.
-    let rd = reciprocal(solved.det32) as u32;
+    let rd = reciprocal(solved.det32);
     let (root_d, root_c) = (isqrt(d.radicand), isqrt(cf.radicand));
     let m_d = divergence_free_magnitude_q32(config, solved.exp, rd, root_d, d.mu);
     let m_c = curl_free_magnitude_q32(config, root_c, cf.mu);

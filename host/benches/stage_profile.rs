@@ -37,7 +37,7 @@ const FIXED: Scaling = Scaling::Fixed {
 };
 
 /// The whole engine over the frame: `represent`, `Fixed` gains (one pass),
-/// strips of the host engine.
+/// strips of the host engine, compiled for `isa` (`dispatch`).
 #[inline(never)]
 fn engine_pass(isa: Isa, engine: &mut SliceEngine<'_>, job: &Job<'_>, rgb: &mut [u8]) {
     let pass = Pass::Represent(FIXED, rgb);
