@@ -6,21 +6,13 @@
 //! radicands the magnitudes have, so every target gives the same bytes (the
 //! tests hold each to `u64::isqrt`).
 
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(any(
+    target_arch = "x86_64",
+    target_arch = "aarch64",
+    all(target_arch = "arm", target_abi = "eabihf")
+))]
 use crate::fpu;
-
-/// `r0[k] ≈ 2³⁰ / √((k + ½) / 256)` for the top byte `k ∈ [64, 256)` of a
-/// normalised argument: a seed good to 8 bits (Q30, in `(2³⁰, 2³¹]`).
-const SEED: [u32; 256] = {
-    let mut table = [0u32; 256];
-    let mut k = 64;
-    while k < 256 {
-        let top = 2 * (k as u128) + 1;
-        table[k] = ((1u128 << 69) / top).isqrt() as u32;
-        k += 1;
-    }
-    table
-};
+use core::num::NonZeroU32;
 
 /// `a · b` widened: one 32×32→64 multiply on every 32-bit target.
 #[inline(always)]
@@ -48,7 +40,13 @@ pub fn isqrt(n: u64) -> u32 {
     );
     #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
     let r = isqrt_by_fpu(n);
-    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    let r = isqrt_by_f32_root(n, fpu::root_512);
+    #[cfg(not(any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        all(target_arch = "arm", target_abi = "eabihf")
+    )))]
     let r = isqrt_by_newton(n);
     r
 }
@@ -66,16 +64,70 @@ fn isqrt_by_fpu(n: u64) -> u32 {
     r - u32::from(mul(r, r) > n)
 }
 
+/// [`isqrt`] from a correctly rounded `f32` root (the M4F's `VSQRT.F32`,
+/// one instruction where the Newton form takes about 60) and one 32-bit
+/// division. Bounds, for `n` in the domain, `k = ⌊√n⌋ ∈ [2²³, 2²⁵)`:
+/// - `a = ⌊n/2¹⁸⌋ < 2³²` enters `f32` with relative error `≤ 2⁻²⁴`, its
+///   root leaves with `≤ 2⁻²⁴` more; `512·√a` lies within `2⁻⁵` below
+///   `√n`. So `seed = ⌊512·√(f32 a)⌋ ∈ [k − 4, k + 3]` (`√n < 2²⁵`:
+///   `1.6·2⁻²⁴·2²⁵ < 3.3`).
+/// - `s = seed − 4 = √n − ε` with `ε ∈ (1, 9)`; `e = n − s² = 2√n·ε − ε²`
+///   lies in `(0, 18·2²⁵) ⊂ u32` (so the low words suffice).
+/// - `e / (2s + 1) = ε + ε(ε − 1)/(2s + 1)`: within `2⁻¹⁸` above `ε`;
+///   truncated, `q = s + ⌊·⌋ ∈ (√n − 1, √n + 2⁻¹⁸]`, i.e. `k − 1 ≤ q ≤
+///   k + 1`, and the two one-step tests of the Newton form end on `k`.
+///
+/// Outside the domain the arithmetic wraps (`2s + 1` is odd, never zero):
+/// some value, no panic. `root_512(a) = ⌊512·√(f32 a)⌋` is a parameter so
+/// that the host tests run this same code with the host's `f32` root
+/// (IEEE's correctly rounded root: the same function as `VSQRT.F32`).
+#[inline(always)]
+#[cfg_attr(
+    not(all(target_arch = "arm", target_abi = "eabihf")),
+    allow(dead_code, reason = "tested on every host")
+)]
+pub(crate) fn isqrt_by_f32_root(n: u64, root_512: impl Fn(u32) -> u32) -> u32 {
+    // Zero is the common case (still parts of a frame): skip the root.
+    if n == 0 {
+        return 0;
+    }
+    let n = n.min(ISQRT_MAX);
+    let a = (n >> 18) as u32;
+    let seed = root_512(a);
+    let s = seed.wrapping_sub(4);
+    let e = (n as u32).wrapping_sub(s.wrapping_mul(s));
+    let step = NonZeroU32::new(s.wrapping_mul(2) | 1).map_or(0, |d| e / d);
+    let q = s.wrapping_add(step);
+    let q = q.wrapping_sub(u32::from(mul(q, q) > n));
+    q.wrapping_add(u32::from(mul(q.wrapping_add(1), q.wrapping_add(1)) <= n))
+}
+
 /// [`isqrt`] without a divide or an FPU. The correction is one step each
 /// way, without loops: no data-dependent branch but the one for zero. The
 /// domain's two octaves normalise by a constant shift each (32-bit targets
 /// have no cheap 64-bit shift by a variable amount).
 #[inline]
 #[cfg_attr(
-    any(target_arch = "x86_64", target_arch = "aarch64"),
+    any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        all(target_arch = "arm", target_abi = "eabihf")
+    ),
     allow(dead_code, reason = "tested on every host")
 )]
 pub fn isqrt_by_newton(n: u64) -> u32 {
+    /// `r0[k] ≈ 2³⁰ / √((k + ½) / 256)` for the top byte `k ∈ [64, 256)` of a
+    /// normalised argument: a seed good to 8 bits (Q30, in `(2³⁰, 2³¹]`).
+    const SEED: [u32; 256] = {
+        let mut table = [0u32; 256];
+        let mut k = 64;
+        while k < 256 {
+            let top = 2 * (k as u128) + 1;
+            table[k] = ((1u128 << 69) / top).isqrt() as u32;
+            k += 1;
+        }
+        table
+    };
     // Zero is the common case (still parts of a frame): skip the root.
     if n == 0 {
         return 0;
@@ -110,6 +162,13 @@ pub fn isqrt_by_newton(n: u64) -> u32 {
 mod tests {
     use super::*;
 
+    /// The M4F's form with the host's `f32` root: IEEE's correctly rounded
+    /// root is one function, `VSQRT.F32` on the board and `sqrtss` here.
+    fn by_f32_root(n: u64) -> u32 {
+        // `as` rounds to nearest into `f32` and truncates out, as `VCVT`.
+        isqrt_by_f32_root(n, |a| ((a as f32).sqrt() * 512.0) as u32)
+    }
+
     /// `n.isqrt()` within the domain, the root of the domain's end beyond it.
     fn want(n: u64) -> u32 {
         n.min(ISQRT_MAX).isqrt() as u32
@@ -132,6 +191,7 @@ mod tests {
             u64::MAX,
         ] {
             assert_eq!(isqrt_by_newton(n), want(n), "{n}");
+            assert_eq!(by_f32_root(n), want(n), "{n}");
             if n <= ISQRT_MAX {
                 assert_eq!(isqrt(n), want(n), "{n}");
             }
@@ -155,7 +215,7 @@ mod tests {
         let wrong = (first + 1..=last)
             .filter(|&r| {
                 let s = r * r;
-                [isqrt, isqrt_by_newton].iter().any(|root| {
+                [isqrt, isqrt_by_newton, by_f32_root].iter().any(|root| {
                     root(s) != r as u32
                         || root(s - 1) != (r - 1) as u32
                         || (s + r <= ISQRT_MAX && root(s + r) != r as u32)
@@ -176,6 +236,7 @@ mod tests {
             if n == 0 || (ISQRT_MIN..=ISQRT_MAX).contains(&n) {
                 assert_eq!(isqrt(n), want(n), "{n}");
                 assert_eq!(isqrt_by_newton(n), want(n), "{n}");
+                assert_eq!(by_f32_root(n), want(n), "{n}");
             }
         }
     }
@@ -185,6 +246,7 @@ mod tests {
     fn no_panic_below_the_domain() {
         for n in (1..1000).chain([ISQRT_MIN - 1, 1 << 40]) {
             let _ = isqrt_by_newton(n);
+            let _ = by_f32_root(n);
         }
     }
 }

@@ -4,14 +4,22 @@
 //! correction to the exact floor. A 64-bit divide is a library call of a
 //! hundred-odd instructions on Cortex-M and RV32; this is about twenty.
 
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(any(
+    target_arch = "x86_64",
+    target_arch = "aarch64",
+    all(target_arch = "arm", target_abi = "eabihf")
+))]
 use crate::fpu;
 use crate::isqrt::mul;
 
 /// `2⁴⁰ / (2k + 1)` for the top byte `k ∈ [128, 256)` of `d`: `2⁶³ / d` at
 /// the middle of the byte's interval, good to 8 bits.
 #[cfg_attr(
-    any(target_arch = "x86_64", target_arch = "aarch64"),
+    any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        all(target_arch = "arm", target_abi = "eabihf")
+    ),
     allow(dead_code, reason = "tested on every host")
 )]
 const SEED: [u32; 128] = {
@@ -34,7 +42,13 @@ const SEED: [u32; 128] = {
 pub fn reciprocal(d: u32) -> u32 {
     #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
     let r = reciprocal_by_fpu(d);
-    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    let r = reciprocal_by_f32_quotient(d, fpu::quotient_2_63);
+    #[cfg(not(any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        all(target_arch = "arm", target_abi = "eabihf")
+    )))]
     let r = reciprocal_by_newton(d);
     r
 }
@@ -54,10 +68,42 @@ pub fn reciprocal_by_fpu(d: u32) -> u32 {
     r - u32::from(mul(r, d) > u64::MAX >> 1)
 }
 
+/// [`reciprocal`] from a correctly rounded `f32` quotient (the M4F's
+/// `VDIV.F32`), 32×32→64 products and two one-step tests. `quotient(d) =
+/// ⌊2³¹ / (f32 d / 2³²)⌋` is a parameter so that the host tests run this
+/// code with the host's `f32` division (IEEE: the same function). Bounds,
+/// with `Q = (2⁶³ − 1)/d` and `T = ⌊Q⌋`:
+/// - two roundings and the truncation put `t` within `3·2⁸ + 1` of `Q`
+///   (`Q < 2³²`), so `r = 2⁶³ − 1 − t·d` has `|r| < 2⁴²`: `r >> 16` fits
+///   `i32`, and `t/2⁶³` is `1/d` within a relative `2⁻²¹`;
+/// - `step = ⌊(r >> 16)·(t >> 1) / 2⁴⁶⌋` is `⌊r/d + ε⌋` with `|ε| < 2⁻¹⁰`
+///   (`r/d·2⁻²¹`, the cut of `r` below `2¹⁶·2³²/2⁶³`, the cut of `t`), and
+///   `Q = t + r/d`, so `y = t + step ∈ [T − 1, T + 1]`: one test down, one
+///   up. Wrapping where a wrong `quotient` could overflow: no panic.
+#[inline(always)]
+#[cfg_attr(
+    not(all(target_arch = "arm", target_abi = "eabihf")),
+    allow(dead_code, reason = "tested on every host")
+)]
+pub(crate) fn reciprocal_by_f32_quotient(d: u32, quotient: impl Fn(u32) -> u32) -> u32 {
+    let d = d.max(1 << 31);
+    let limit = u64::MAX >> 1;
+    let t = quotient(d);
+    let r = limit.wrapping_sub(mul(d, t)) as i64;
+    let step = (i64::from((r >> 16) as i32) * i64::from(t >> 1)) >> 46;
+    let y = t.saturating_add_signed(step as i32);
+    let y = y.wrapping_sub(u32::from(mul(d, y) > limit));
+    y.wrapping_add(u32::from(mul(d, y) + u64::from(d) <= limit))
+}
+
 /// [`reciprocal`] without a divide.
 #[inline]
 #[cfg_attr(
-    any(target_arch = "x86_64", target_arch = "aarch64"),
+    any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        all(target_arch = "arm", target_abi = "eabihf")
+    ),
     allow(dead_code, reason = "tested on every host")
 )]
 pub fn reciprocal_by_newton(d: u32) -> u32 {
@@ -85,8 +131,16 @@ pub fn reciprocal_by_newton(d: u32) -> u32 {
 mod tests {
     use super::*;
 
-    /// Both forms this host has (the FPU's where it has one).
-    const FORMS: [fn(u32) -> u32; 2] = [reciprocal_by_newton, reciprocal];
+    /// The M4F's form with the host's `f32` division (`as` rounds to
+    /// nearest into `f32` and truncates out, as `VCVT`).
+    fn by_f32_quotient(d: u32) -> u32 {
+        let quotient = |d| ((1.0 / (d as f32 / 4_294_967_296.0)) * 2_147_483_648.0) as u32;
+        reciprocal_by_f32_quotient(d, quotient)
+    }
+
+    /// Every form: the Newton steps, the M4F's, and the FPU's where this
+    /// host has one.
+    const FORMS: [fn(u32) -> u32; 3] = [reciprocal_by_newton, by_f32_quotient, reciprocal];
 
     /// All 2³¹ normalised divisors (25 s per form in release):
     /// `cargo test -p reynoldsflow-core --release -- --ignored every_divisor`.

@@ -116,6 +116,10 @@ fn per_pixel(config: &Config, fields: bool, rows: &TailRows<'_>, out: &mut [Flow
 
 /// The row in batches of `LANES` (the last padded).
 #[inline(always)]
+#[cfg_attr(
+    not(target_arch = "x86_64"),
+    allow(clippy::modulo_one, reason = "compiled but unused where LANES is 1")
+)]
 fn batched(config: &Config, fields: bool, rows: &TailRows<'_>, out: &mut [FlowPixel]) {
     let [a, b, c, ph, pl, qh, ql] = rows.sums.map(|row| row.chunks_exact(LANES));
     let [vx, vy] = rows.v.map(|row| row.chunks_exact(LANES));
