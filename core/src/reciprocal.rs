@@ -79,7 +79,9 @@ pub fn reciprocal_by_fpu(d: u32) -> u32 {
 /// - `step = ⌊(r >> 16)·(t >> 1) / 2⁴⁶⌋` is `⌊r/d + ε⌋` with `|ε| < 2⁻¹⁰`
 ///   (`r/d·2⁻²¹`, the cut of `r` below `2¹⁶·2³²/2⁶³`, the cut of `t`), and
 ///   `Q = t + r/d`, so `y = t + step ∈ [T − 1, T + 1]`: one test down, one
-///   up. Wrapping where a wrong `quotient` could overflow: no panic.
+///   up. `y ≤ T + 1 < 2³²` (`T = 2³² − 1` only at `d = 2³¹`, where
+///   `t = T` and `step = 0`), so the wrapping operations never wrap in the
+///   domain; outside it they keep a wrong `quotient` from panicking.
 #[inline(always)]
 #[cfg_attr(
     not(all(target_arch = "arm", target_abi = "eabihf")),
@@ -91,7 +93,7 @@ pub(crate) fn reciprocal_by_f32_quotient(d: u32, quotient: impl Fn(u32) -> u32) 
     let t = quotient(d);
     let r = limit.wrapping_sub(mul(d, t)) as i64;
     let step = (i64::from((r >> 16) as i32) * i64::from(t >> 1)) >> 46;
-    let y = t.saturating_add_signed(step as i32);
+    let y = t.wrapping_add_signed(step as i32);
     let y = y.wrapping_sub(u32::from(mul(d, y) > limit));
     y.wrapping_add(u32::from(mul(d, y) + u64::from(d) <= limit))
 }
