@@ -5,9 +5,12 @@
 //! computes only with integers, so both copies give the same bytes
 //! (tested in `tests/tests/simd.rs`).
 
+use fixed::types::U32F32;
 use multiversion::multiversion;
 use multiversion::target::target_cfg_f;
-use reynoldsflow_core::{Error, FramePair, Memory, Plan, Scaling, Sink, TileEngine};
+use reynoldsflow_core::{ByteScale, Error, FramePair, Memory, Plan, Scaling, Sink, TileEngine};
+
+use crate::fixed_engine::bytes_from_kept;
 
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -70,6 +73,16 @@ pub fn run<M: Memory, S: Sink>(
     }
 }
 
+/// The second step of per-frame min–max ([`bytes_from_kept`]), compiled
+/// for `isa` like the pass: its 64-bit multiplies and compares take AVX2's
+/// lanes.
+pub fn kept_to_bytes(isa: Isa, kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
+    match isa {
+        Isa::Best => kept_to_bytes_best(kept, rgb, scales),
+        Isa::Portable => bytes_from_kept(kept, rgb, scales),
+    }
+}
+
 /// The targets of [`Isa::Best`], written once for every function cloned for them.
 macro_rules! best_targets {
     ($($function:item)*) => {
@@ -86,6 +99,10 @@ best_targets! {
         sink: &mut S,
     ) -> Result<(), Error> {
         pass.run(engine, plan, frames, sink)
+    }
+
+    fn kept_to_bytes_best(kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
+        bytes_from_kept(kept, rgb, scales)
     }
 
     /// What [`Isa::Best`] runs on this CPU, for reports: the clone that

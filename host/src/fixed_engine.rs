@@ -15,7 +15,7 @@ use fixed::types::U32F32;
 use std::sync::Mutex;
 
 use reynoldsflow_core::{
-    Config, ExtremesSink, FlowPixel, FramePair, MemorySize, Params, Plan, Scaling, Sink,
+    ByteScale, Config, ExtremesSink, FlowPixel, FramePair, MemorySize, Params, Plan, Scaling, Sink,
     SliceEngine, rgb,
 };
 
@@ -362,16 +362,25 @@ impl FrameEngine {
         );
         dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
         let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.0))?;
-        for (dst, &[m_d, m_c]) in rgb.chunks_exact_mut(3).zip(&self.magnitudes) {
-            let px = FlowPixel {
-                m_d,
-                m_c,
-                luma: dst[2],
-                ..FlowPixel::default()
-            };
-            dst.copy_from_slice(&reynoldsflow_core::rgb(&px, &scale_d, &scale_c));
-        }
+        dispatch::kept_to_bytes(self.isa, &self.magnitudes, rgb, &[scale_d, scale_c]);
         Ok(())
+    }
+}
+
+/// The second step of per-frame min–max: each pixel's kept magnitudes to
+/// its R and G bytes, once the frame's scales are known (B, `fⁿ`, is in
+/// place already). Compiled for each ISA by [`dispatch::kept_to_bytes`].
+#[inline(always)]
+pub(crate) fn bytes_from_kept(kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
+    let [scale_d, scale_c] = scales;
+    for (dst, &[m_d, m_c]) in rgb.chunks_exact_mut(3).zip(kept) {
+        let px = FlowPixel {
+            m_d,
+            m_c,
+            luma: dst[2],
+            ..FlowPixel::default()
+        };
+        dst.copy_from_slice(&reynoldsflow_core::rgb(&px, scale_d, scale_c));
     }
 }
 
@@ -483,24 +492,29 @@ mod tests {
 
     #[test]
     fn the_rgb_path_gives_the_planes_bytes_while_reused() {
-        let mut engine = FrameEngine::new();
         let mut rgb = Vec::new();
-        // Reused across sizes: larger, smaller, then larger again.
-        for (width, height, seed) in [(300, 45, 4), (17, 9, 6), (300, 45, 8)] {
-            let (a, b) = (frame(width, height, seed), frame(width, height, seed + 1));
-            for scaling in SCALINGS {
-                let planes = engine
-                    .compute(&a, &b, Params::DEFAULT, None, scaling)
-                    .unwrap();
-                for tile in [None, Some((17, 9))] {
-                    engine
-                        .represent(&a, &b, Params::DEFAULT, tile, scaling, &mut rgb)
-                        .unwrap();
-                    assert!(rgb == planes.rep, "{width}x{height} {tile:?} {scaling:?}");
+        // Both compilations of the pass and of the min–max byte step.
+        for isa in [Isa::Best, Isa::Portable] {
+            let mut engine = FrameEngine::on(isa);
+            // Reused across sizes: larger, smaller, then larger again.
+            for (width, height, seed) in [(300, 45, 4), (17, 9, 6), (300, 45, 8)] {
+                let (a, b) = (frame(width, height, seed), frame(width, height, seed + 1));
+                for scaling in SCALINGS {
+                    let planes =
+                        compute_fixed_on(Isa::Portable, &a, &b, Params::DEFAULT, None, scaling)
+                            .unwrap();
+                    for tile in [None, Some((17, 9))] {
+                        engine
+                            .represent(&a, &b, Params::DEFAULT, tile, scaling, &mut rgb)
+                            .unwrap();
+                        let what = format!("{isa:?} {width}x{height} {tile:?} {scaling:?}");
+                        assert!(rgb == planes.rep, "{what}");
+                    }
                 }
             }
         }
         // A tile as wide as the frame: the engine grows to it, same bytes.
+        let mut engine = FrameEngine::new();
         let (a, b) = (frame(300, 45, 10), frame(300, 45, 11));
         let strips = engine
             .compute(&a, &b, Params::DEFAULT, None, Scaling::PerFrameMinMax)
