@@ -29,22 +29,6 @@ pub fn nearest(x: f64) -> u64 {
     (x + TWO_52).to_bits() & ((1 << 52) - 1)
 }
 
-/// The number of significant bits of `x` (0 for 0), from the exponent of
-/// an exact `f64`: AVX2 has no vector leading-zero count, and the
-/// compiler's emulation of one (nibble lookups) cost the batch about 30
-/// instructions per pixel over the solve's four counts. `x ≥ 2¹²` enters
-/// as `x >> 12 < 2⁵²` (the count falls by exactly 12), smaller `x` as
-/// itself; both are exact in `f64`, whose biased exponent is then
-/// `1022 + bits` (0 for 0).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub fn bit_length(x: u64) -> u32 {
-    let high = x >> 12;
-    let (t, cut) = if high != 0 { (high, 12) } else { (x, 0) };
-    let biased = (exact(t).to_bits() >> 52) as u32;
-    biased.max(1022) - 1022 + cut
-}
-
 /// The correctly rounded `f64` root (`core` has no stable `sqrt`). On
 /// x86-64 through the SSE2 intrinsic, which the compiler encodes for the
 /// code around it (`vsqrtpd` across a batch inside the host's AVX2 pass):
@@ -151,25 +135,5 @@ mod tests {
         assert_eq!(nearest(3.5), 4);
         assert_eq!(nearest(7.499_999), 7);
         assert_eq!(nearest(4_294_967_296.0), 1 << 32);
-    }
-
-    #[test]
-    #[cfg(target_arch = "x86_64")]
-    fn bit_length_is_the_count() {
-        let want = |x: u64| u64::BITS - x.leading_zeros();
-        for k in 0..64 {
-            let p = 1u64 << k;
-            for x in [p - 1, p, p + 1, p | (p >> 1), u64::MAX >> (63 - k)] {
-                assert_eq!(bit_length(x), want(x), "{x}");
-            }
-        }
-        let mut s = 0x2545_F491_4F6C_DD1Du64;
-        for i in 0..100_000u64 {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            let x = s >> (i % 64);
-            assert_eq!(bit_length(x), want(x), "{x}");
-        }
     }
 }

@@ -35,22 +35,10 @@ pub const FIELD_MAX_Q16: u64 = i32::MAX as u64;
 /// Magnitudes saturate at 2⁴⁸ − 1 in Q32.32 (65 536 px).
 pub const MAGNITUDE_MAX_Q32: u64 = (1 << 48) - 1;
 
-/// Number of significant bits of `x` (0 for 0). On x86-64 from the FPU,
-/// in a form the tail's batches vectorise (`fpu::bit_length`); elsewhere
-/// the count instruction (`CLZ` on Arm).
+/// Number of significant bits of `x` (0 for 0).
 #[inline(always)]
 fn bit_length(x: u64) -> i32 {
-    #[cfg(target_arch = "x86_64")]
-    let bits = crate::fpu::bit_length(x);
-    #[cfg(not(target_arch = "x86_64"))]
-    let bits = u64::BITS - x.leading_zeros();
-    bits as i32
-}
-
-/// `x.leading_zeros()` through [`bit_length`].
-#[inline(always)]
-fn leading_zeros(x: u64) -> u32 {
-    (64 - bit_length(x)) as u32
+    (u64::BITS - x.leading_zeros()) as i32
 }
 
 /// `prod · 2^shift` rounded to nearest (half up), saturating at `max`.
@@ -100,7 +88,7 @@ impl Squares {
     #[inline(always)]
     pub fn of(x: u64, y: u64) -> Self {
         // `& 63`: the zero vector shifts by 0 and stays 0.
-        let lz = leading_zeros(x | y) & 63;
+        let lz = (x | y).leading_zeros() & 63;
         let (x, y) = (((x << lz) >> 40) as u32, ((y << lz) >> 40) as u32);
         Self {
             radicand: mul(x, x) + mul(y, y),
@@ -195,7 +183,7 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
     };
     let (p, q) = (cut(p), cut(q));
     // det's top 32 bits; det ≥ Λ4² ≥ 1, so the shift is below 64.
-    let d32 = (det << leading_zeros(det)) >> 32;
+    let d32 = (det << det.leading_zeros()) >> 32;
     Solved {
         n: [c4 * p - b4 * q, a4 * q - b4 * p],
         det32: d32 as u32,
@@ -212,7 +200,7 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
 pub fn divergence_free_q16(config: &Config, solved: &Solved, rd: u32) -> [i32; 2] {
     solved.n.map(|n| {
         let mag = n.unsigned_abs();
-        let lz = leading_zeros(mag) & 63;
+        let lz = mag.leading_zeros() & 63;
         let n31 = ((mag << lz) >> 33) as u32;
         let m1 = (mul(n31, rd) >> 32) as u32;
         // n = n31·2^(b−31); n31·rd ≈ m1·2³²; times 2^exp · k.mant·2^(−k.exp) · 2¹⁶.
