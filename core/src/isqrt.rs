@@ -1,10 +1,11 @@
 //! An exact integer square root. Where the FPU has a correctly rounded
-//! `f64` root (x86-64, aarch64) it is that root's floor; elsewhere a table
-//! seed, two Newton steps on the reciprocal root (multiplies and shifts
-//! only) and a correction to the exact floor, about 20 operations where a
-//! bit-by-bit root takes over a hundred. Both are the exact floor over the
-//! radicands the magnitudes have, so every target gives the same bytes (the
-//! tests hold each to `u64::isqrt`).
+//! `f64` root (x86-64, aarch64) it is that root's floor; on the M4F its
+//! `f32` root and one 32-bit division step; elsewhere a table seed, two
+//! Newton steps on the reciprocal root (multiplies and shifts only) and a
+//! correction to the exact floor, about 20 operations where a bit-by-bit
+//! root takes over a hundred. All are the exact floor over the radicands
+//! the magnitudes have, so every target gives the same bytes (the tests
+//! hold each to `u64::isqrt`).
 
 #[cfg(any(
     target_arch = "x86_64",

@@ -1,8 +1,9 @@
 //! An exact reciprocal: `⌊(2⁶³ − 1) / d⌋` for a normalised 32-bit `d`. Where
-//! the FPU divides, from its `f64` quotient; elsewhere without a divide,
-//! from a table seed, two Newton steps (multiplies and shifts) and a
-//! correction to the exact floor. A 64-bit divide is a library call of a
-//! hundred-odd instructions on Cortex-M and RV32; this is about twenty.
+//! the FPU divides `f64`, from its quotient; on the M4F, from its `f32`
+//! quotient and one correction step; elsewhere without a divide, from a
+//! table seed, two Newton steps (multiplies and shifts) and a correction
+//! to the exact floor. A 64-bit divide is a library call of a hundred-odd
+//! instructions on Cortex-M and RV32; these are about thirty.
 
 #[cfg(any(
     target_arch = "x86_64",
@@ -35,8 +36,9 @@ const SEED: [u32; 128] = {
 /// `⌊(2⁶³ − 1) / d⌋` for `d ∈ [2³¹, 2³²)`, in `[2³¹, 2³²)`; other `d` are
 /// raised to 2³¹ (the caller normalises). Where the FPU divides `f64`
 /// (x86-64, aarch64) from its quotient ([`reciprocal_by_fpu`], which a
-/// batch vectorises); every other target takes [`reciprocal_by_newton`].
-/// Both are the exact floor.
+/// batch vectorises); on 32-bit Arm with the hard-float ABI from the `f32`
+/// quotient ([`reciprocal_by_f32_quotient`]); every other target takes
+/// [`reciprocal_by_newton`]. All are the exact floor.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn reciprocal(d: u32) -> u32 {

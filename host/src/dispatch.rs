@@ -3,7 +3,9 @@
 //! detection (`multiversion`). The core's pass is `#[inline(always)]` down
 //! to its row kernels, so the AVX2 copy is the whole pass. The core
 //! computes only with integers, so both copies give the same bytes
-//! (tested in `tests/tests/simd.rs`).
+//! (tested in `tests/tests/simd.rs`). Per-frame min–max's byte step, which
+//! runs after the pass, is compiled the same two ways (tested in
+//! `fixed_engine`'s RGB-path test).
 
 use fixed::types::U32F32;
 use multiversion::multiversion;
@@ -73,9 +75,9 @@ pub fn run<M: Memory, S: Sink>(
     }
 }
 
-/// The second step of per-frame min–max ([`bytes_from_kept`]), compiled
-/// for `isa` like the pass: its 64-bit multiplies and compares take AVX2's
-/// lanes.
+/// The second step of per-frame min–max (`fixed_engine::bytes_from_kept`),
+/// compiled for `isa` like the pass: its 64-bit multiplies and compares
+/// take AVX2's lanes.
 pub fn kept_to_bytes(isa: Isa, kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
     match isa {
         Isa::Best => kept_to_bytes_best(kept, rgb, scales),
