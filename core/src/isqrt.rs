@@ -70,13 +70,14 @@ fn isqrt_by_fpu(n: u64) -> u32 {
 /// division. Bounds, for `n` in the domain, `k = ⌊√n⌋ ∈ [2²³, 2²⁵)`:
 /// - `a = ⌊n/2¹⁸⌋ < 2³²` enters `f32` with relative error `≤ 2⁻²⁴`, its
 ///   root leaves with `≤ 2⁻²⁴` more; `512·√a` lies within `2⁻⁵` below
-///   `√n`. So `seed = ⌊512·√(f32 a)⌋ ∈ [k − 4, k + 3]` (`√n < 2²⁵`:
-///   `1.6·2⁻²⁴·2²⁵ < 3.3`).
-/// - `s = seed − 4 = √n − ε` with `ε ∈ (1, 9)`; `e = n − s² = 2√n·ε − ε²`
-///   lies in `(0, 18·2²⁵) ⊂ u32` (so the low words suffice).
-/// - `e / (2s + 1) = ε + ε(ε − 1)/(2s + 1)`: within `2⁻¹⁸` above `ε`;
-///   truncated, `q = s + ⌊·⌋ ∈ (√n − 1, √n + 2⁻¹⁸]`, i.e. `k − 1 ≤ q ≤
-///   k + 1`, and the two one-step tests of the Newton form end on `k`.
+///   `√n`. So `512·√(f32 a)` is within 3.3 of `√n` (`√n < 2²⁵`:
+///   `1.6·2⁻²⁴·2²⁵ < 3.3`) and `seed`, its floor, in `[k − 4, k + 4]`.
+/// - `s = seed − 4 = √n − ε` with `ε ∈ [0, 9)`; `e = n − s² = 2√n·ε − ε²`
+///   lies in `[0, 18·2²⁵) ⊂ u32` (so the low words suffice).
+/// - `e / (2s + 1) = ε + ε(ε − 1)/(2s + 1)`: within `2⁻¹⁷` of `ε` (below
+///   it only for `ε < 1`, by at most `¼/(2s + 1)`); truncated, `q = s + ⌊·⌋
+///   ∈ (√n − 1 − 2⁻¹⁷, √n + 2⁻¹⁷]`, i.e. `k − 1 ≤ q ≤ k + 1`, and the two
+///   one-step tests of the Newton form end on `k`.
 ///
 /// Outside the domain the arithmetic wraps (`2s + 1` is odd, never zero):
 /// some value, no panic. `root_512(a) = ⌊512·√(f32 a)⌋` is a parameter so
