@@ -12,18 +12,18 @@
 //! same way.
 
 /// 2⁵²: adding it to `0 ≤ x < 2⁵²` leaves `round(x)` in the mantissa bits.
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(fpu_f64)]
 const TWO_52: f64 = 4_503_599_627_370_496.0;
 
 /// `n` as `f64`, exactly, for `n < 2⁵²` (the caller's bound).
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(fpu_f64)]
 #[inline(always)]
 pub fn exact(n: u64) -> f64 {
     f64::from_bits(TWO_52.to_bits() | n) - TWO_52
 }
 
 /// `x` rounded to the nearest integer (ties to even), for `0 ≤ x < 2⁵²`.
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(fpu_f64)]
 #[inline(always)]
 pub fn nearest(x: f64) -> u64 {
     (x + TWO_52).to_bits() & ((1 << 52) - 1)
@@ -61,7 +61,7 @@ pub fn sqrt(x: f64) -> f64 {
 /// `√(a/2¹⁴)·2¹⁶` (power-of-two scalings, exact), so the value is that of
 /// `((a as f32).sqrt() * 512.0) as u32` on any IEEE machine.
 #[inline(always)]
-#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[cfg(fpu_f32)]
 #[allow(unsafe_code)]
 pub fn root_512(a: u32) -> u32 {
     let root: u32;
@@ -93,7 +93,7 @@ pub fn root_512(a: u32) -> u32 {
 /// (power-of-two scalings, exact), so the value is that of
 /// `(2³¹ · (1 / (d as f32 / 2³²))) as u32` on any IEEE machine.
 #[inline(always)]
-#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[cfg(fpu_f32)]
 #[allow(unsafe_code)]
 pub fn quotient_2_63(d: u32) -> u32 {
     let quotient: u32;

@@ -7,11 +7,7 @@
 //! the magnitudes have, so every target gives the same bytes (the tests
 //! hold each to `u64::isqrt`).
 
-#[cfg(any(
-    target_arch = "x86_64",
-    target_arch = "aarch64",
-    all(target_arch = "arm", target_abi = "eabihf")
-))]
+#[cfg(any(fpu_f64, fpu_f32))]
 use crate::fpu;
 use core::num::NonZeroU32;
 
@@ -39,15 +35,11 @@ pub fn isqrt(n: u64) -> u32 {
         n == 0 || (ISQRT_MIN..=ISQRT_MAX).contains(&n),
         "radicand {n}"
     );
-    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    #[cfg(fpu_f64)]
     let r = isqrt_by_fpu(n);
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[cfg(fpu_f32)]
     let r = isqrt_by_f32_root(n, fpu::root_512);
-    #[cfg(not(any(
-        target_arch = "x86_64",
-        target_arch = "aarch64",
-        all(target_arch = "arm", target_abi = "eabihf")
-    )))]
+    #[cfg(not(any(fpu_f64, fpu_f32)))]
     let r = isqrt_by_newton(n);
     r
 }
@@ -58,7 +50,7 @@ pub fn isqrt(n: u64) -> u32 {
 /// lies in `[k, k + 1]` and its nearest integer is `k` or `k + 1`; one test
 /// (`r² > n`, `r ≤ 2²⁵`) takes the floor.
 #[inline(always)]
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(fpu_f64)]
 fn isqrt_by_fpu(n: u64) -> u32 {
     let n = n.min(ISQRT_MAX);
     let r = fpu::nearest(fpu::sqrt(fpu::exact(n))) as u32;
@@ -84,10 +76,7 @@ fn isqrt_by_fpu(n: u64) -> u32 {
 /// that the host tests run this same code with the host's `f32` root
 /// (IEEE's correctly rounded root: the same function as `VSQRT.F32`).
 #[inline(always)]
-#[cfg_attr(
-    not(all(target_arch = "arm", target_abi = "eabihf")),
-    allow(dead_code, reason = "tested on every host")
-)]
+#[cfg_attr(not(fpu_f32), allow(dead_code, reason = "tested on every host"))]
 pub(crate) fn isqrt_by_f32_root(n: u64, root_512: impl Fn(u32) -> u32) -> u32 {
     // Zero is the common case (still parts of a frame): skip the root.
     if n == 0 {
@@ -110,11 +99,7 @@ pub(crate) fn isqrt_by_f32_root(n: u64, root_512: impl Fn(u32) -> u32) -> u32 {
 /// have no cheap 64-bit shift by a variable amount).
 #[inline]
 #[cfg_attr(
-    any(
-        target_arch = "x86_64",
-        target_arch = "aarch64",
-        all(target_arch = "arm", target_abi = "eabihf")
-    ),
+    any(fpu_f64, fpu_f32),
     allow(dead_code, reason = "tested on every host")
 )]
 pub fn isqrt_by_newton(n: u64) -> u32 {
@@ -202,7 +187,7 @@ mod tests {
 
     /// The FPU's root is exact below the domain too.
     #[test]
-    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    #[cfg(fpu_f64)]
     fn fpu_root_is_exact_at_every_size() {
         for n in (0..100_000).chain((0..64).map(|b| 1u64 << b)) {
             assert_eq!(isqrt_by_fpu(n), want(n), "{n}");

@@ -59,11 +59,7 @@ extern crate std;
 
 mod engine;
 mod error;
-#[cfg(any(
-    target_arch = "x86_64",
-    target_arch = "aarch64",
-    all(target_arch = "arm", target_abi = "eabihf")
-))]
+#[cfg(any(fpu_f64, fpu_f32))]
 mod fpu;
 mod frames;
 mod isqrt;

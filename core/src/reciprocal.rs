@@ -5,22 +5,14 @@
 //! to the exact floor. A 64-bit divide is a library call of a hundred-odd
 //! instructions on Cortex-M and RV32; these are about thirty.
 
-#[cfg(any(
-    target_arch = "x86_64",
-    target_arch = "aarch64",
-    all(target_arch = "arm", target_abi = "eabihf")
-))]
+#[cfg(any(fpu_f64, fpu_f32))]
 use crate::fpu;
 use crate::isqrt::mul;
 
 /// `2⁴⁰ / (2k + 1)` for the top byte `k ∈ [128, 256)` of `d`: `2⁶³ / d` at
 /// the middle of the byte's interval, good to 8 bits.
 #[cfg_attr(
-    any(
-        target_arch = "x86_64",
-        target_arch = "aarch64",
-        all(target_arch = "arm", target_abi = "eabihf")
-    ),
+    any(fpu_f64, fpu_f32),
     allow(dead_code, reason = "tested on every host")
 )]
 const SEED: [u32; 128] = {
@@ -42,15 +34,11 @@ const SEED: [u32; 128] = {
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn reciprocal(d: u32) -> u32 {
-    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    #[cfg(fpu_f64)]
     let r = reciprocal_by_fpu(d);
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[cfg(fpu_f32)]
     let r = reciprocal_by_f32_quotient(d, fpu::quotient_2_63);
-    #[cfg(not(any(
-        target_arch = "x86_64",
-        target_arch = "aarch64",
-        all(target_arch = "arm", target_abi = "eabihf")
-    )))]
+    #[cfg(not(any(fpu_f64, fpu_f32)))]
     let r = reciprocal_by_newton(d);
     r
 }
@@ -62,7 +50,7 @@ pub fn reciprocal(d: u32) -> u32 {
 /// at `2³² − 1 ≥ T`, is `T` or `T + 1`, and one test (`r·d > 2⁶³ − 1`,
 /// below 2⁶⁴) takes the floor.
 #[inline(always)]
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(fpu_f64)]
 pub fn reciprocal_by_fpu(d: u32) -> u32 {
     let d = d.max(1 << 31);
     let q = 9_223_372_036_854_775_808.0 / fpu::exact(u64::from(d));
@@ -85,10 +73,7 @@ pub fn reciprocal_by_fpu(d: u32) -> u32 {
 ///   `t = T` and `step = 0`), so the wrapping operations never wrap in the
 ///   domain; outside it they keep a wrong `quotient` from panicking.
 #[inline(always)]
-#[cfg_attr(
-    not(all(target_arch = "arm", target_abi = "eabihf")),
-    allow(dead_code, reason = "tested on every host")
-)]
+#[cfg_attr(not(fpu_f32), allow(dead_code, reason = "tested on every host"))]
 pub(crate) fn reciprocal_by_f32_quotient(d: u32, quotient: impl Fn(u32) -> u32) -> u32 {
     let d = d.max(1 << 31);
     let limit = u64::MAX >> 1;
@@ -103,11 +88,7 @@ pub(crate) fn reciprocal_by_f32_quotient(d: u32, quotient: impl Fn(u32) -> u32) 
 /// [`reciprocal`] without a divide.
 #[inline]
 #[cfg_attr(
-    any(
-        target_arch = "x86_64",
-        target_arch = "aarch64",
-        all(target_arch = "arm", target_abi = "eabihf")
-    ),
+    any(fpu_f64, fpu_f32),
     allow(dead_code, reason = "tested on every host")
 )]
 pub fn reciprocal_by_newton(d: u32) -> u32 {
