@@ -59,6 +59,10 @@ pub struct ByteScale {
     /// `x` that makes 255 (at most 2³²) above it. `u64::MAX`: never.
     below_255: u64,
     frac: u32,
+    /// Made by [`Self::fixed`] with a nonzero gain: `offset = 0`,
+    /// `shift = 16`, `frac = 32`,
+    /// which [`Self::byte`] takes as constants.
+    fixed: bool,
 }
 
 impl ByteScale {
@@ -85,6 +89,7 @@ impl ByteScale {
             gain,
             below_255,
             frac,
+            fixed: false,
         }
     }
 
@@ -93,7 +98,11 @@ impl ByteScale {
     /// `min(255, ⌊m·k + ½⌋)` except within `k · 2⁻¹⁶` of a tie.
     #[inline(always)]
     pub fn fixed(k: U16F16) -> Self {
-        Self::new(0, 16, k.to_bits(), 32)
+        // A zero gain keeps the general form (its offset maps all to 0).
+        Self {
+            fixed: k != U16F16::ZERO,
+            ..Self::new(0, 16, k.to_bits(), 32)
+        }
     }
 
     /// Per-frame min–max from the frame's extremes (`min ≤ max`): the range
@@ -121,6 +130,9 @@ impl ByteScale {
     /// 32-bit targets build from several instructions).
     #[inline(always)]
     pub fn byte(&self, m: U32F32) -> u8 {
+        if self.fixed && !crate::VECTOR_ROWS {
+            return self.fixed_byte(m);
+        }
         let d = m.to_bits().saturating_sub(self.offset);
         if d > self.below_255 {
             return 255;
@@ -134,6 +146,25 @@ impl ByteScale {
         let raised = x << (wide - self.frac);
         let product = u64::from(raised) * u64::from(self.gain) + (1 << (wide - 1));
         ((product >> 32) as u32 >> (wide - 32)) as u8
+    }
+}
+
+impl ByteScale {
+    /// [`Self::byte`] of a [`Self::fixed`] scale, its constants known: no
+    /// offset, a constant shift, the product's high word. On the M4 (where
+    /// the sink runs in the engine's loop, short of registers) 56 → 20
+    /// instructions per pixel for the two bytes (`scripts/embedded-check`).
+    /// Not where the row loops vectorise: the branch kept the x86-64 AVX2
+    /// pass's byte loop scalar (+12.6 per pixel, `scripts/profile-stages`).
+    #[inline(always)]
+    fn fixed_byte(&self, m: U32F32) -> u8 {
+        let m = m.to_bits();
+        if m > self.below_255 {
+            return 255;
+        }
+        // `fixed` made `below_255 < 2⁴⁸`, so `x < 2³²`; `x·g + 2³¹ < 2⁶⁴`.
+        let x = (m >> 16) as u32;
+        ((u64::from(x) * u64::from(self.gain) + (1 << 31)) >> 32) as u8
     }
 }
 
@@ -261,7 +292,11 @@ mod tests {
                 u64::MAX,
             ];
             for m in ms.map(U32F32::from_bits) {
-                assert_eq!(scale.byte(m), by_definition(&scale, m), "{scale:?} m={m}");
+                let want = by_definition(&scale, m);
+                assert_eq!(scale.byte(m), want, "{scale:?} m={m}");
+                if scale.fixed {
+                    assert_eq!(scale.fixed_byte(m), want, "{scale:?} m={m}");
+                }
             }
         }
     }

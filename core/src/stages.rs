@@ -94,21 +94,64 @@ where
 {
     let cols = span(n, r.max(2));
     let len = cols.len();
-    // `taps5` would do, but cost the M4 24 instructions per pixel here
-    // (`scripts/embedded-check`, 320×240: 1 059 against 1 035).
-    let at = |shift: usize| cut(row, (cols.start + shift).wrapping_sub(2), len);
-    let (Some(a), Some(b), Some(c), Some(d), Some(e), Some(out)) = (
-        at(0),
-        at(1),
-        at(2),
-        at(3),
-        at(4),
-        cut_mut(out, cols.start, len),
-    ) else {
+    let Some(out) = cut_mut(out, cols.start, len) else {
+        return;
+    };
+    let first = cols.start.wrapping_sub(2);
+    // Running sums on the scalar boards (one load and four adds a column,
+    // where the loads are the cost); taps where they vectorise (a running
+    // sum would serialise them).
+    if !crate::VECTOR_ROWS {
+        if let Some(taps) = cut(row, first, len + 4) {
+            running_binomial(taps, out);
+        }
+    } else {
+        tapped_binomial(row, first, out);
+    }
+}
+
+/// `out[i] = G ⋆ row[first + i .. first + i + 5]`, five taps a column.
+#[inline(always)]
+fn tapped_binomial<T>(row: &[T], first: usize, out: &mut [T])
+where
+    T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
+{
+    let len = out.len();
+    // Each tap cut from the row itself: cut from one slice of `len + 4`
+    // instead, aarch64 counts 347 instructions per pixel against 285
+    // (`scripts/embedded-check`); `taps5` cost the M4 24 (1 059 against
+    // 1 035 at 320×240).
+    let at = |shift: usize| cut(row, first.wrapping_add(shift), len);
+    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (at(0), at(1), at(2), at(3), at(4)) else {
         return;
     };
     for i in 0..len {
         out[i] = binomial(a[i], b[i], c[i], d[i], e[i]);
+    }
+}
+
+/// [`tapped_binomial`] as four running pair sums, `[1 4 6 4 1] = [1 1]⁴`:
+/// with `sₖ` the `k`-fold pair sum, each new tap `x` gives `s₁ = x′ + x`,
+/// `s₂ = s₁′ + s₁`, `s₃ = s₂′ + s₂` and the output `s₃′ + s₃` (primes: the
+/// previous column's). Every partial sum has nonnegative weights summing to
+/// at most 16, so it stays within the output's bound.
+#[inline(always)]
+fn running_binomial<T>(taps: &[T], out: &mut [T])
+where
+    T: Copy + Add<Output = T>,
+{
+    let (Some(&[x0, x1, x2, x3]), Some(rest)) = (taps.get(..4), taps.get(4..)) else {
+        return;
+    };
+    let (s1_a, s1_b, s1_c) = (x0 + x1, x1 + x2, x2 + x3);
+    let (s2_a, s2_b) = (s1_a + s1_b, s1_b + s1_c);
+    let (mut x, mut s1, mut s2, mut s3) = (x3, s1_c, s2_b, s2_a + s2_b);
+    for (o, &next) in out.iter_mut().zip(rest) {
+        let t1 = x + next;
+        let t2 = s1 + t1;
+        let t3 = s2 + t2;
+        *o = s3 + t3;
+        (x, s1, s2, s3) = (next, t1, t2, t3);
     }
 }
 
@@ -420,6 +463,34 @@ pub fn structure_row(
 mod tests {
     use super::*;
     use crate::params::residual_shift;
+
+    /// Both forms of the horizontal binomial agree with its definition,
+    /// on every length and on rows at the bound of the sums.
+    #[test]
+    fn running_and_tapped_binomials_are_the_binomial() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        for len in 0..40 {
+            for bound in [3, 2_139_095_040 / 16] {
+                let taps: std::vec::Vec<i32> = (0..len + 4)
+                    .map(|_| {
+                        seed ^= seed << 13;
+                        seed ^= seed >> 7;
+                        seed ^= seed << 17;
+                        (seed % (2 * bound as u64 + 1)) as i32 - bound
+                    })
+                    .collect();
+                let want: std::vec::Vec<i32> = taps
+                    .windows(5)
+                    .map(|w| w[0] + 4 * w[1] + 6 * w[2] + 4 * w[3] + w[4])
+                    .collect();
+                let (mut tapped, mut running) = (std::vec![0; len], std::vec![0; len]);
+                tapped_binomial(&taps, 0, &mut tapped);
+                running_binomial(&taps, &mut running);
+                assert_eq!(tapped, want, "len {len}");
+                assert_eq!(running, want, "len {len}");
+            }
+        }
+    }
 
     /// The 32-bit form equals rounding the exact 64-bit residual, at every
     /// shift, on extremes and random admissible inputs.
