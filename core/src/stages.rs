@@ -220,30 +220,60 @@ fn horizontal_parts(
     cols: core::ops::Range<usize>,
 ) {
     let (start, len) = (cols.start, cols.len());
-    let [v1, v2, v3, v4] = vert.map(|row| taps5(row, start, len));
-    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
-        return;
-    };
     let (Some(ex), Some(ey)) = (cut_mut(ex, start, len), cut_mut(ey, start, len)) else {
         return;
     };
-    let tap = |row: &[&[i16]; 5], k: usize, i: usize| i32::from(row[k][i]);
-    for i in 0..len {
-        let kb_x = tap(&v1, 3, i) - tap(&v1, 1, i);
-        let bs_x = (tap(&v2, 3, i) + tap(&v2, 4, i)) - (tap(&v2, 1, i) + tap(&v2, 0, i));
-        ex[i] = kb_x - 3 * bs_x;
-        let kb_y = tap(&v3, 1, i) + 4 * tap(&v3, 2, i) + tap(&v3, 3, i);
-        let bs_y = (tap(&v4, 0, i) + tap(&v4, 4, i))
-            + 3 * (tap(&v4, 1, i) + tap(&v4, 3, i))
-            + 4 * tap(&v4, 2, i);
-        ey[i] = kb_y - 3 * bs_y;
-        debug_assert!(
-            ex[i].abs().max(ey[i].abs()) <= E_MAX,
-            "E = ({}, {})",
-            ex[i],
-            ey[i]
-        );
+    if crate::VECTOR_ROWS {
+        // Each tap its own shifted slice: independent lanes to vectorise.
+        let [v1, v2, v3, v4] = vert.map(|row| taps5(row, start, len));
+        let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
+            return;
+        };
+        for i in 0..len {
+            let tap = |row: &[&[i16]; 5], k: usize| i32::from(row[k][i]);
+            (ex[i], ey[i]) = boundary_minus_domain_at(
+                |k| tap(&v1, k),
+                |k| tap(&v2, k),
+                |k| tap(&v3, k),
+                |k| tap(&v4, k),
+            );
+        }
+    } else {
+        // One slice per row, the taps at constant offsets from one pointer:
+        // a slice per tap kept 20 pointers live, which the M4 spilled
+        // (61 instructions per pixel against 42, `scripts/embedded-check`).
+        let [v1, v2, v3, v4] = vert.map(|row| cut(row, start.wrapping_sub(2), len + 4));
+        let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
+            return;
+        };
+        for i in 0..len {
+            let tap = |row: &[i16], k: usize| i32::from(row[i + k]);
+            (ex[i], ey[i]) = boundary_minus_domain_at(
+                |k| tap(v1, k),
+                |k| tap(v2, k),
+                |k| tap(v3, k),
+                |k| tap(v4, k),
+            );
+        }
     }
+}
+
+/// `E` (x, y) of one column from its vertical parts' taps `k ∈ [0, 5)`
+/// (column offsets `k − 2`).
+#[inline(always)]
+fn boundary_minus_domain_at(
+    v1: impl Fn(usize) -> i32,
+    v2: impl Fn(usize) -> i32,
+    v3: impl Fn(usize) -> i32,
+    v4: impl Fn(usize) -> i32,
+) -> (i32, i32) {
+    let kb_x = v1(3) - v1(1);
+    let bs_x = (v2(3) + v2(4)) - (v2(1) + v2(0));
+    let kb_y = v3(1) + 4 * v3(2) + v3(3);
+    let bs_y = (v4(0) + v4(4)) + 3 * (v4(1) + v4(3)) + 4 * v4(2);
+    let e = (kb_x - 3 * bs_x, kb_y - 3 * bs_y);
+    debug_assert!(e.0.abs().max(e.1.abs()) <= E_MAX, "E = {e:?}");
+    e
 }
 
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five `E` rows centred on it.
