@@ -387,7 +387,7 @@ fn core_regions(
         .unwrap(),
     );
     let mut memory = fixed_engine::HostEngine::new();
-    let plan = Plan::strips(config, fixed_engine::STRIP_WIDTH).unwrap();
+    let plan = Plan::strips(config, fixed_engine::strip_width(W)).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, prev, next).unwrap())
         .unwrap();

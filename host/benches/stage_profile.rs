@@ -29,7 +29,7 @@ use reynoldsflow_core::{
 mod common;
 use common::{SIZES, moving_pair};
 use reynoldsflow_host::dispatch::{self, Isa, Pass};
-use reynoldsflow_host::fixed_engine::{HostEngine, STRIP_WIDTH};
+use reynoldsflow_host::fixed_engine::{HostEngine, strip_width};
 
 const FIXED: Scaling = Scaling::Fixed {
     k_d: U16F16::lit("8"),
@@ -75,7 +75,7 @@ fn digests() {
     for (w, h) in SIZES {
         let (prev, next) = moving_pair(w, h);
         let config = Config::new(w, h, Params::DEFAULT).unwrap();
-        let plan = Plan::strips(config, STRIP_WIDTH).unwrap();
+        let plan = Plan::strips(config, strip_width(w)).unwrap();
         let job = plan
             .bind(FramePair::packed(&config, &prev, &next).unwrap())
             .unwrap();
@@ -119,7 +119,7 @@ fn main() {
     }
     let (prev, next) = moving_pair(w, h);
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let plan = Plan::strips(config, STRIP_WIDTH).unwrap();
+    let plan = Plan::strips(config, strip_width(w)).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, &prev, &next).unwrap())
         .unwrap();

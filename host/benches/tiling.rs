@@ -8,7 +8,6 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use reynoldsflow_core::Engine;
 
 use reynoldsflow_host::dispatch::Isa;
-use reynoldsflow_host::fixed_engine::STRIP_WIDTH;
 
 mod common;
 use common::{FIXED, core_engine};
@@ -47,7 +46,7 @@ fn tiling(c: &mut Criterion) {
         bench_shape::<46>(c, w, h, (32, 32));
         bench_shape::<78>(c, w, h, (64, h));
         bench_shape::<94>(c, w, h, (80, h));
-        bench_shape::<{ STRIP_WIDTH + 14 }>(c, w, h, (STRIP_WIDTH, h));
+        bench_shape::<142>(c, w, h, (128, h));
         bench_shape::<FULL>(c, w, h, (w, h));
     }
     shapes::<174>(c, 160, 120);

@@ -11,7 +11,7 @@ use reynoldsflow_core::{
 };
 
 use crate::cli::values::{EngineKind, ScaleArg};
-use crate::fixed_engine::{self, STRIP_WIDTH};
+use crate::fixed_engine::{self, MAX_STRIP_WIDTH};
 use crate::outputs::{OutputSpec, PairFields, Variant};
 use crate::pipeline::{self, Compute};
 use crate::{FlowPlanes, HostError};
@@ -89,12 +89,12 @@ impl PairPool {
     }
 }
 
-/// Tile size for `threads`: the host's strip width, or narrower
+/// Tile size for `threads`: the host's widest strip, or narrower
 /// ones, in as many rows of tiles as gives the shortest pass, counting each
 /// tile's halo (`HALO` px on every side) and `⌈tiles / threads⌉` rounds.
 fn balanced_tile(width: usize, height: usize, threads: usize) -> (usize, usize) {
-    let min_across = width.div_ceil(STRIP_WIDTH);
-    let mut best = (usize::MAX, (width.min(STRIP_WIDTH), height));
+    let min_across = width.div_ceil(MAX_STRIP_WIDTH);
+    let mut best = (usize::MAX, (width.min(MAX_STRIP_WIDTH), height));
     for across in min_across..=min_across + threads {
         for down in 1..=(2 * threads).min(height) {
             let (tw, th) = (width.div_ceil(across), height.div_ceil(down));
@@ -168,13 +168,13 @@ mod tests {
     #[test]
     fn tiles_are_balanced_over_the_threads() {
         // One thread: the engine's widest full-height strips.
-        assert_eq!(balanced_tile(640, 480, 1), (STRIP_WIDTH, 480));
-        // 640 px is five such strips: two or four threads get an even count.
+        assert_eq!(balanced_tile(640, 480, 1), (640, 480));
+        // Two or four threads get an even count of tiles.
         for threads in [2, 4] {
             let (tw, th) = balanced_tile(640, 480, threads);
             let tiles = 640usize.div_ceil(tw) * 480usize.div_ceil(th);
             assert_eq!(tiles % threads, 0, "{threads} threads: {tw}x{th}");
-            assert!(tw <= STRIP_WIDTH);
+            assert!(tw <= MAX_STRIP_WIDTH);
         }
     }
 

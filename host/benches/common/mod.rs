@@ -8,10 +8,14 @@ use std::hint::black_box;
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling};
 use reynoldsflow_host::dispatch::{self, Isa, Pass};
-use reynoldsflow_host::fixed_engine::STRIP_WIDTH;
+/// Output columns of the strips of the compile-time engine the benches
+/// time (`Engine<COLS>`, arrays in a box, as a board would hold them);
+/// `reynoldsflow run` takes the host's wider strips
+/// (`fixed_engine::strip_width`).
+pub const STRIPS: usize = 128;
 
-/// Window columns of the host's default strips (128 output columns).
-pub const COLS: usize = STRIP_WIDTH + 14;
+/// Window columns of those strips.
+pub const COLS: usize = STRIPS + 14;
 
 /// The frame sizes every bench covers.
 pub const SIZES: [(usize, usize); 4] = [(160, 120), (320, 240), (640, 480), (1280, 720)];

@@ -54,8 +54,9 @@ pub struct ComputeArgs {
     /// to 2^-32).
     #[arg(long, value_name = "L", default_value = "1e-4", value_parser = values::parse_lambda)]
     pub lambda: f64,
-    /// Tile size for the fixed engine (any, up to the frame); default: strips
-    /// of 128 columns. Every tiling gives the same output.
+    /// Tile size for the fixed engine (any, up to the frame); default:
+    /// full-height strips as wide as the frame, up to 1280 columns. Every
+    /// tiling gives the same output.
     #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
     pub tile: Option<TileSize>,
 }
