@@ -96,13 +96,22 @@ impl Squares {
         }
     }
 
-    /// Of `V` (for `|v_c|`).
+    /// Of `V` (for `|v_c|`): [`Self::of`] in 32-bit lanes (`V` fits them),
+    /// which vectorise twice as wide and need no 64-bit shifts on 32-bit
+    /// targets. The same radicand and `μ` for every nonzero `V` within its
+    /// bound; the zero vector's `μ` differs, and does not matter (its root
+    /// is 0).
     #[inline(always)]
     pub fn curl_free(v: [i32; 2]) -> Self {
-        Self::of(
-            u64::from(v[0].unsigned_abs()),
-            u64::from(v[1].unsigned_abs()),
-        )
+        let [x, y] = v.map(i32::unsigned_abs);
+        // Top bit to bit 23: `|V| ≤ 6 854 400 < 2²³` (`stages`), so
+        // `lz ≥ 9` and the shift is up to the left (up to 24 for zero).
+        let lz = (x | y).leading_zeros();
+        let (x, y) = (x << lz.saturating_sub(8), y << lz.saturating_sub(8));
+        Self {
+            radicand: mul(x, x) + mul(y, y),
+            mu: 8 - lz as i32,
+        }
     }
 
     /// Of the numerators `N` (for `|v_d|`).
@@ -425,6 +434,35 @@ pub(crate) mod tests {
             let got = m_c(&cfg, [x, y]) as f64;
             assert!((got - want).abs() <= want * 2f64.powi(-21) + 0.5, "{x} {y}");
         }
+    }
+
+    /// The 32-bit form of `V`'s squares is the 64-bit one.
+    #[test]
+    fn curl_free_squares_are_the_squares_of_v() {
+        let mut s = 0x0123_4567_89ab_cdefu64;
+        for case in 0..200_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let bound = |x: i32| x.clamp(-6_854_400, 6_854_400);
+            let v = [s as i32 >> (case % 31), (s >> 32) as i32 >> (case % 29)].map(bound);
+            let v = if case % 7 == 0 { [v[0], 0] } else { v };
+            let wide = Squares::of(
+                u64::from(v[0].unsigned_abs()),
+                u64::from(v[1].unsigned_abs()),
+            );
+            let narrow = Squares::curl_free(v);
+            assert_eq!(narrow.radicand, wide.radicand, "{v:?}");
+            if v != [0, 0] {
+                assert_eq!(narrow.mu, wide.mu, "{v:?}");
+            }
+        }
+        assert_eq!(Squares::curl_free([0, 0]).radicand, 0);
+        let extreme = [6_854_400, -6_854_400];
+        assert_eq!(
+            Squares::curl_free(extreme),
+            Squares::of(6_854_400, 6_854_400)
+        );
     }
 
     #[test]
