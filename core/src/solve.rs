@@ -48,8 +48,15 @@ fn scaled(prod: u64, shift: i32, max: u64) -> u64 {
         let fits = shift < 64 && prod <= max >> shift;
         return if fits { prod << shift } else { max };
     }
-    // floor((floor(2x) + 1) / 2) = floor(x + 1/2) with x = prod / 2^−shift.
-    let half = prod.checked_shr(shift.unsigned_abs() - 1).unwrap_or(0);
+    scaled_down(prod, shift.unsigned_abs(), max)
+}
+
+/// `prod / 2^k` rounded to nearest (half up), saturating at `max`, for
+/// `k ≥ 1`: [`scaled`] where the shift is known to be to the right.
+#[inline(always)]
+fn scaled_down(prod: u64, k: u32, max: u64) -> u64 {
+    // floor((floor(2x) + 1) / 2) = floor(x + 1/2) with x = prod / 2^k.
+    let half = prod.checked_shr(k.wrapping_sub(1)).unwrap_or(0);
     ((half + 1) >> 1).min(max)
 }
 
@@ -126,12 +133,11 @@ impl Squares {
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn curl_free_magnitude_q32(config: &Config, r: u32, mu: i32) -> u64 {
-    // r·2^μ · c.mant·2^(−c.exp) · 2⁻¹⁶ px, times 2³² for Q32.32.
-    scaled(
-        mul(r, config.c.mant),
-        mu + 16 - config.c.exp as i32,
-        MAGNITUDE_MAX_Q32,
-    )
+    // r·2^μ · c.mant·2^(−c.exp) · 2⁻¹⁶ px, times 2³² for Q32.32: a shift
+    // to the right by `c.exp − 16 − μ ≥ 24 − 16 + 1` (`μ ≤ −1` for `V`
+    // within its bound, see [`Squares::curl_free`]).
+    let k = (config.c.exp as i32 - 16 - mu).max(1) as u32;
+    scaled_down(mul(r, config.c.mant), k, MAGNITUDE_MAX_Q32)
 }
 
 /// The structure sums of one pixel (SPEC §3 step 8), as the engine sums
