@@ -189,7 +189,12 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
     );
     let join = |[hi, lo]: [i32; 2]| (i64::from(hi) << 14) + i64::from(lo);
     let (p, q) = (join(s.p), join(s.q));
-    let tau = (bit_length(p.unsigned_abs() | q.unsigned_abs()) - 31).max(0) as u32;
+    // τ = max(0, bitlen(|p| | |q|) − 31), the bit length of the part above
+    // bit 31, which fits 32-bit lanes (`|p| ≤ 2³¹·2¹⁴ + 2³¹ < 2⁴⁶` for any
+    // words, `< 2⁴⁵` as the engine sums them): twice as wide
+    // as 64-bit ones in AVX2, and one `CLZ` on 32-bit targets.
+    let above = ((p.unsigned_abs() | q.unsigned_abs()) >> 31) as u32;
+    let tau = u32::BITS - above.leading_zeros();
     // Toward zero, so the solve stays odd in (p, q); `|P′|, |Q′| < 2³¹`, so
     // the products below are 32×32 → 64 (which targets and vectors have).
     let cut = |v: i64| -> i64 {
