@@ -60,8 +60,7 @@ pub struct ByteScale {
     below_255: u64,
     frac: u32,
     /// Made by [`Self::fixed`] with a nonzero gain: `offset = 0`,
-    /// `shift = 16`, `frac = 32`,
-    /// which [`Self::byte`] takes as constants.
+    /// `shift = 16`, `frac = 32`, which [`Self::byte`] takes as constants.
     fixed: bool,
 }
 
