@@ -77,11 +77,11 @@ mod stages;
 mod stream;
 mod tail;
 
-/// Whether the compiler takes the row loops in vector lanes (x86-64,
-/// aarch64): there, forms that keep a loop branch-free with independent
-/// taps win; on the scalar boards (the M-profile cores, RV32) fewer loads,
-/// fewer 64-bit steps and fewer live registers do (`stages`, `scale`).
-const VECTOR_ROWS: bool = cfg!(any(target_arch = "x86_64", target_arch = "aarch64"));
+/// Whether the compiler takes the row loops in vector lanes (`build.rs`):
+/// there, forms that keep a loop branch-free with independent taps win; on
+/// the scalar boards fewer loads, fewer 64-bit steps and fewer live
+/// registers do (`stages`, `scale`).
+const VECTOR_ROWS: bool = cfg!(vector_rows);
 
 pub use engine::{
     Arrays, Engine, FlowPixel, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine,

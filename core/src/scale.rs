@@ -146,9 +146,7 @@ impl ByteScale {
         let product = u64::from(raised) * u64::from(self.gain) + (1 << (wide - 1));
         ((product >> 32) as u32 >> (wide - 32)) as u8
     }
-}
 
-impl ByteScale {
     /// [`Self::byte`] of a [`Self::fixed`] scale, its constants known: no
     /// offset, a constant shift, the product's high word. On the M4 (where
     /// the sink runs in the engine's loop, short of registers) 56 → 20

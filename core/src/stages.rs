@@ -229,25 +229,17 @@ fn horizontal_parts(
         return;
     };
     let tap = |row: &[&[i16]; 5], k: usize, i: usize| i32::from(row[k][i]);
-    if crate::VECTOR_ROWS {
-        for i in 0..len {
-            ex[i] = boundary_minus_domain_x(|k| tap(&v1, k, i), |k| tap(&v2, k, i));
-            ey[i] = boundary_minus_domain_y(|k| tap(&v3, k, i), |k| tap(&v4, k, i));
-        }
-    } else {
-        // One loop per component on the scalar boards: one for both kept
-        // 20 row pointers live, which the M4 spilled (61 instructions per
-        // pixel against 45, `scripts/embedded-check`).
-        // Counted, not enumerated: `iter_mut().enumerate()` left a bounds
-        // check (a panic path) on the taps.
-        #[allow(clippy::needless_range_loop)]
-        for i in 0..len {
-            ex[i] = boundary_minus_domain_x(|k| tap(&v1, k, i), |k| tap(&v2, k, i));
-        }
-        #[allow(clippy::needless_range_loop)]
-        for i in 0..len {
-            ey[i] = boundary_minus_domain_y(|k| tap(&v3, k, i), |k| tap(&v4, k, i));
-        }
+    // One loop per component: one for both kept 20 row pointers live,
+    // which the M4 spilled (61 instructions per pixel against 45,
+    // `scripts/embedded-check`). Counted, not enumerated:
+    // `iter_mut().enumerate()` left a bounds check (a panic path) on the taps.
+    #[allow(clippy::needless_range_loop)]
+    for i in 0..len {
+        ex[i] = boundary_minus_domain_x(|k| tap(&v1, k, i), |k| tap(&v2, k, i));
+    }
+    #[allow(clippy::needless_range_loop)]
+    for i in 0..len {
+        ey[i] = boundary_minus_domain_y(|k| tap(&v3, k, i), |k| tap(&v4, k, i));
     }
 }
 

@@ -10,7 +10,7 @@ use reynoldsflow_core::Engine;
 use reynoldsflow_host::dispatch::Isa;
 
 mod common;
-use common::{FIXED, core_engine};
+use common::{COLS, FIXED, STRIPS, core_engine};
 
 /// A textured frame moved by (t, t/2) px: every stage has work to do.
 fn frame(w: usize, h: usize, t: f64) -> Vec<u8> {
@@ -46,7 +46,7 @@ fn tiling(c: &mut Criterion) {
         bench_shape::<46>(c, w, h, (32, 32));
         bench_shape::<78>(c, w, h, (64, h));
         bench_shape::<94>(c, w, h, (80, h));
-        bench_shape::<142>(c, w, h, (128, h));
+        bench_shape::<COLS>(c, w, h, (STRIPS, h));
         bench_shape::<FULL>(c, w, h, (w, h));
     }
     shapes::<174>(c, 160, 120);
