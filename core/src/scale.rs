@@ -147,6 +147,32 @@ impl ByteScale {
         ((product >> 32) as u32 >> (wide - 32)) as u8
     }
 
+    /// [`Self::byte`] of `N` magnitudes, in the form vector lanes take (the
+    /// host's per-frame min–max byte step): every step in 64-bit lanes with
+    /// shifts common to all lanes, no early return. Where `d ≤ below_255`,
+    /// `x = (d >> shift) << (wide − frac) < 2³²` as in [`Self::byte`], so its
+    /// low word is all of it (one 32×32→64 multiply, `vpmuludq`) and
+    /// `(x·g + 2^(wide−1)) >> wide` is the high word shifted by
+    /// `wide − 32`; above, the lane's value is unused (wrapping).
+    #[inline(always)]
+    pub fn bytes<const N: usize>(&self, m: &[U32F32; N]) -> [u8; N] {
+        let wide = self.frac.max(32);
+        let (up, half) = (wide - self.frac, 1u64 << (wide - 1));
+        let gain = u64::from(self.gain);
+        let mut out = [0u8; N];
+        // Selections as masks (all ones or zero), which lanes take as they
+        // are; a branch here kept the loop scalar.
+        let mask = |condition: bool| 0u64.wrapping_sub(u64::from(condition));
+        for (out, m) in out.iter_mut().zip(m) {
+            let m = m.to_bits();
+            let d = m.wrapping_sub(self.offset) & mask(m >= self.offset);
+            let x = ((d >> self.shift) << up) & u64::from(u32::MAX);
+            let byte = (x * gain).wrapping_add(half) >> wide;
+            *out = (byte | mask(d > self.below_255)) as u8;
+        }
+        out
+    }
+
     /// [`Self::byte`] of a [`Self::fixed`] scale, its constants known: no
     /// offset, a constant shift, the product's high word. On the M4 (where
     /// the sink runs in the engine's loop, short of registers) 56 → 20
@@ -257,8 +283,9 @@ mod tests {
         (((product >> (scale.frac - 1)) + 1) >> 1).min(255) as u8
     }
 
-    /// The high-word byte is the definition's for every scale the two
-    /// constructors make, at random magnitudes and around saturation.
+    /// The high-word byte (and its lane form) is the definition's for every
+    /// scale the two constructors make, at random magnitudes and around
+    /// saturation.
     #[test]
     fn byte_is_the_definition() {
         let mut s = 0x9e37_79b9_7f4a_7c15u64;
@@ -288,9 +315,12 @@ mod tests {
                 0,
                 u64::MAX,
             ];
-            for m in ms.map(U32F32::from_bits) {
+            let ms = ms.map(U32F32::from_bits);
+            let lanes = scale.bytes(&ms);
+            for (m, lane) in ms.into_iter().zip(lanes) {
                 let want = by_definition(&scale, m);
                 assert_eq!(scale.byte(m), want, "{scale:?} m={m}");
+                assert_eq!(lane, want, "lanes: {scale:?} m={m}");
                 if scale.fixed {
                     assert_eq!(scale.fixed_byte(m), want, "{scale:?} m={m}");
                 }

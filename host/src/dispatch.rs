@@ -7,12 +7,11 @@
 //! runs after the pass, is compiled the same two ways (tested in
 //! `fixed_engine`'s RGB-path test).
 
-use fixed::types::U32F32;
 use multiversion::multiversion;
 use multiversion::target::target_cfg_f;
 use reynoldsflow_core::{ByteScale, Error, FramePair, Memory, Plan, Scaling, Sink, TileEngine};
 
-use crate::fixed_engine::bytes_from_kept;
+use crate::fixed_engine::{Kept, bytes_from_kept};
 
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -78,10 +77,16 @@ pub fn run<M: Memory, S: Sink>(
 /// The second step of per-frame min–max (`fixed_engine::bytes_from_kept`),
 /// compiled for `isa` like the pass: its 64-bit multiplies and compares
 /// take AVX2's lanes.
-pub fn kept_to_bytes(isa: Isa, kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
+pub(crate) fn kept_to_bytes(
+    isa: Isa,
+    kept: &Kept,
+    luma: &[u8],
+    rgb: &mut [u8],
+    scales: &[ByteScale; 2],
+) {
     match isa {
-        Isa::Best => kept_to_bytes_best(kept, rgb, scales),
-        Isa::Portable => bytes_from_kept(kept, rgb, scales),
+        Isa::Best => kept_to_bytes_best(kept, luma, rgb, scales),
+        Isa::Portable => bytes_from_kept(kept, luma, rgb, scales),
     }
 }
 
@@ -103,8 +108,13 @@ best_targets! {
         pass.run(engine, plan, frames, sink)
     }
 
-    fn kept_to_bytes_best(kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
-        bytes_from_kept(kept, rgb, scales)
+    fn kept_to_bytes_best(
+        kept: &Kept,
+        luma: &[u8],
+        rgb: &mut [u8],
+        scales: &[ByteScale; 2],
+    ) {
+        bytes_from_kept(kept, luma, rgb, scales)
     }
 
     /// What [`Isa::Best`] runs on this CPU, for reports: the clone that

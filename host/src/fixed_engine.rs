@@ -283,10 +283,10 @@ pub struct FrameEngine {
     engine: HostEngine,
     /// Which compilation of the engine pass runs.
     isa: Isa,
-    /// `[|v_d|, |v_c|]` of every pixel of the last pair (per-frame min–max
-    /// of [`Self::represent`] only): all that the byte step needs besides
-    /// `fⁿ`, which waits in the RGB frame's B channel.
-    magnitudes: Vec<[U32F32; 2]>,
+    /// `|v_d|` and `|v_c|` of every pixel of the last pair (per-frame
+    /// min–max of [`Self::represent`] only): all that the byte step needs
+    /// besides `fⁿ`.
+    kept: Kept,
 }
 
 impl Default for FrameEngine {
@@ -307,7 +307,7 @@ impl FrameEngine {
         Self {
             engine: HostEngine::new(),
             isa,
-            magnitudes: Vec::new(),
+            kept: Kept::default(),
         }
     }
 
@@ -364,45 +364,76 @@ impl FrameEngine {
                 &mut (),
             )?);
         }
-        self.magnitudes.resize(width * height, [U32F32::ZERO; 2]);
-        let mut sink = (
-            ExtremesSink::default(),
-            KeptMagnitudes {
-                width,
-                magnitudes: &mut self.magnitudes,
-                rgb,
-            },
-        );
+        self.kept.resize(width * height);
+        let mut sink = KeptMagnitudes {
+            width,
+            kept: &mut self.kept,
+            extremes: ExtremesSink::default(),
+        };
         dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
-        let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.0))?;
-        dispatch::kept_to_bytes(self.isa, &self.magnitudes, rgb, &[scale_d, scale_c]);
+        let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.extremes))?;
+        dispatch::kept_to_bytes(
+            self.isa,
+            &self.kept,
+            &prev.pixels,
+            rgb,
+            &[scale_d, scale_c],
+        );
         Ok(())
     }
 }
 
-/// The second step of per-frame min–max: each pixel's kept magnitudes to
-/// its R and G bytes, once the frame's scales are known (B, `fⁿ`, is in
-/// place already). Compiled for each ISA by [`dispatch::kept_to_bytes`].
+/// Pixels per batch of the min–max byte step: eight R and eight G bytes
+/// in lanes, then interleaved with `fⁿ` into 24 bytes of RGB.
+const BYTE_BATCH: usize = 64;
+
+/// The second step of per-frame min–max: each pixel's kept magnitudes and
+/// its `fⁿ` byte (`luma`: the frame itself, the B channel unchanged) to its
+/// three RGB bytes, once the frame's scales are known. Compiled for each
+/// ISA by [`dispatch::kept_to_bytes`].
 #[inline(always)]
-pub(crate) fn bytes_from_kept(kept: &[[U32F32; 2]], rgb: &mut [u8], scales: &[ByteScale; 2]) {
+pub(crate) fn bytes_from_kept(kept: &Kept, luma: &[u8], rgb: &mut [u8], scales: &[ByteScale; 2]) {
     let [scale_d, scale_c] = scales;
-    for (dst, &[m_d, m_c]) in rgb.chunks_exact_mut(3).zip(kept) {
-        let px = FlowPixel {
-            m_d,
-            m_c,
-            luma: dst[2],
-            ..FlowPixel::default()
-        };
-        dst.copy_from_slice(&reynoldsflow_core::rgb(&px, scale_d, scale_c));
+    let (m_d, m_d_rest) = kept.m_d.as_chunks::<BYTE_BATCH>();
+    let (m_c, m_c_rest) = kept.m_c.as_chunks::<BYTE_BATCH>();
+    let (luma, luma_rest) = luma.as_chunks::<BYTE_BATCH>();
+    let (out, out_rest) = rgb.as_chunks_mut::<{ 3 * BYTE_BATCH }>();
+    let batches = m_d.iter().zip(m_c).zip(luma);
+    for (out, ((m_d, m_c), luma)) in out.iter_mut().zip(batches) {
+        let (r, g) = (scale_d.bytes(m_d), scale_c.bytes(m_c));
+        for (i, out) in out.as_chunks_mut::<3>().0.iter_mut().enumerate() {
+            *out = [r[i], g[i], luma[i]];
+        }
+    }
+    let rest = m_d_rest.iter().zip(m_c_rest).zip(luma_rest);
+    for (out, ((&m_d, &m_c), &luma)) in out_rest.as_chunks_mut::<3>().0.iter_mut().zip(rest) {
+        *out = [scale_d.byte(m_d), scale_c.byte(m_c), luma];
     }
 }
 
-/// The first step of per-frame min–max: each pixel's magnitudes into a
-/// plane, its `fⁿ` byte straight into the RGB frame.
+/// What per-frame min–max keeps of a pair until its scales are known: both
+/// magnitudes of every pixel, one plane each (so that the byte step reads
+/// each in lanes).
+#[derive(Default)]
+pub(crate) struct Kept {
+    m_d: Vec<U32F32>,
+    m_c: Vec<U32F32>,
+}
+
+impl Kept {
+    /// Room for `pixels` (grown, never shrunk: every value is overwritten).
+    fn resize(&mut self, pixels: usize) {
+        self.m_d.resize(pixels, U32F32::ZERO);
+        self.m_c.resize(pixels, U32F32::ZERO);
+    }
+}
+
+/// The first step of per-frame min–max: each pixel's magnitudes into the
+/// kept planes, and the frame's extremes, in one loop over the engine's rows.
 struct KeptMagnitudes<'a> {
     width: usize,
-    magnitudes: &'a mut [[U32F32; 2]],
-    rgb: &'a mut [u8],
+    kept: &'a mut Kept,
+    extremes: ExtremesSink,
 }
 
 impl Sink for KeptMagnitudes<'_> {
@@ -413,11 +444,13 @@ impl Sink for KeptMagnitudes<'_> {
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
         let start = y * self.width + x;
-        let end = start + pixels.len();
-        let rgb = self.rgb[3 * start..3 * end].chunks_exact_mut(3);
-        for ((m, dst), px) in self.magnitudes[start..end].iter_mut().zip(rgb).zip(pixels) {
-            *m = [px.m_d, px.m_c];
-            dst[2] = px.luma;
+        let span = start..start + pixels.len();
+        let (kept_d, kept_c) = (&mut self.kept.m_d[span.clone()], &mut self.kept.m_c[span]);
+        let ExtremesSink { m_d, m_c } = &mut self.extremes;
+        for ((kept_d, kept_c), px) in kept_d.iter_mut().zip(kept_c).zip(pixels) {
+            (*kept_d, *kept_c) = (px.m_d, px.m_c);
+            m_d.add(px.m_d);
+            m_c.add(px.m_c);
         }
     }
 }
