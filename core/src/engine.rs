@@ -23,40 +23,8 @@ use crate::schedule::{
 use crate::stages::{
     CHANNELS, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
 };
-use crate::tail::{TailRows, tail_row};
-use crate::{Config, Error, Job, Tile};
-
-/// Everything the representation knows about one pixel.
-///
-/// The fields are computed only for sinks that ask for them
-/// ([`Sink::reads_fields`]); for the others they are zero.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FlowPixel {
-    /// Curl-free field `v_c` (x, y), pixels, Q16.16, to nearest.
-    pub v_c: [I16F16; 2],
-    /// Divergence-free field `v_d` (x, y), pixels, Q16.16, to nearest
-    /// (saturating at ±32 768 px).
-    pub v_d: [I16F16; 2],
-    /// `|v_c|`, Q32.32, from the exact `V` (relative error below 2⁻²¹,
-    /// so per-frame min–max keeps its precision on small motions).
-    pub m_c: U32F32,
-    /// `|v_d|`, Q32.32, from the solve's numerators before any rounding
-    /// (relative error below 2⁻²⁰; saturating at 65 536 px).
-    pub m_d: U32F32,
-    /// The pixel of `fⁿ` (the representation's B channel).
-    pub luma: u8,
-}
-
-impl FlowPixel {
-    const ZERO: Self = Self {
-        v_c: [I16F16::ZERO; 2],
-        v_d: [I16F16::ZERO; 2],
-        m_c: U32F32::ZERO,
-        m_d: U32F32::ZERO,
-        luma: 0,
-    };
-}
+use crate::tail::{TailOut, TailRows, tail_row};
+use crate::{Config, Error, Fields, Job, Pixels, Tile};
 
 /// Where output goes: one call per output row of a tile, in top-to-bottom
 /// order within the tile.
@@ -70,7 +38,7 @@ pub trait Sink {
     }
 
     /// Pixels `[x, x + pixels.len())` of frame row `y`.
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]);
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>);
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
@@ -80,7 +48,7 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     }
 
     #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         (**self).row(y, x, pixels)
     }
 }
@@ -91,7 +59,7 @@ impl Sink for () {
         false
     }
 
-    fn row(&mut self, _y: usize, _x: usize, _pixels: &[FlowPixel]) {}
+    fn row(&mut self, _y: usize, _x: usize, _pixels: Pixels<'_>) {}
 }
 
 /// Both sinks see every row.
@@ -102,7 +70,7 @@ impl<A: Sink, B: Sink> Sink for (A, B) {
     }
 
     #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         self.0.row(y, x, pixels);
         self.1.row(y, x, pixels);
     }
@@ -122,10 +90,13 @@ pub(crate) struct Window {
 }
 
 /// The rows a window of `cols` columns computes in, per [`Memory`] kind:
-/// 32-bit words, 16-bit halves, bytes and output pixels.
+/// 32-bit words, 16-bit halves, bytes, and the output's magnitudes and
+/// fields.
 const WORD_ROWS: usize = CHANNELS + CHANNELS * SUM_DEPTH + 2 * E_DEPTH + 2 * V_DEPTH + 2;
 const HALF_ROWS: usize = D_DEPTH + 4;
 const BYTE_ROWS: usize = P0_DEPTH;
+const MAGNITUDE_ROWS: usize = 2;
+const FIELD_ROWS: usize = 4;
 
 /// Where an engine's working memory lives: arrays of a compile-time width
 /// ([`Arrays`], for firmware and statics) or slices the caller owns, of a
@@ -134,22 +105,32 @@ const BYTE_ROWS: usize = P0_DEPTH;
 pub trait Memory: memory::Carve {}
 
 mod memory {
-    use super::FlowPixel;
+    use fixed::types::{I16F16, U32F32};
 
-    /// The memory as four planes, and the window columns it holds.
+    /// The memory as five planes, one per element type.
+    pub struct Planes<'a> {
+        pub words: &'a mut [i32],
+        pub halves: &'a mut [i16],
+        pub bytes: &'a mut [u8],
+        pub magnitudes: &'a mut [U32F32],
+        pub fields: &'a mut [I16F16],
+    }
+
+    /// The memory as planes, and the window columns it holds.
     pub trait Carve {
         fn cols(&self) -> usize;
-        fn planes(&mut self) -> (&mut [i32], &mut [i16], &mut [u8], &mut [FlowPixel]);
+        fn planes(&mut self) -> Planes<'_>;
     }
 }
 
 /// Working memory for windows of up to `COLS` columns, as arrays:
-/// `316 · COLS` bytes and a few more ([`working_bytes`]). `repr(C)`, widest
+/// `308 · COLS` bytes and a few more ([`working_bytes`]). `repr(C)`, widest
 /// fields first, so [`working_bytes`] can follow the layout.
 #[repr(C)]
 pub struct Arrays<const COLS: usize> {
+    magnitudes: [[U32F32; COLS]; MAGNITUDE_ROWS],
     words: [[i32; COLS]; WORD_ROWS],
-    out: [FlowPixel; COLS],
+    fields: [[I16F16; COLS]; FIELD_ROWS],
     halves: [[i16; COLS]; HALF_ROWS],
     bytes: [[u8; COLS]; BYTE_ROWS],
 }
@@ -163,25 +144,27 @@ impl<const COLS: usize> memory::Carve for Arrays<COLS> {
     }
 
     #[inline(always)]
-    fn planes(&mut self) -> (&mut [i32], &mut [i16], &mut [u8], &mut [FlowPixel]) {
-        (
-            self.words.as_flattened_mut(),
-            self.halves.as_flattened_mut(),
-            self.bytes.as_flattened_mut(),
-            &mut self.out,
-        )
+    fn planes(&mut self) -> memory::Planes<'_> {
+        memory::Planes {
+            words: self.words.as_flattened_mut(),
+            halves: self.halves.as_flattened_mut(),
+            bytes: self.bytes.as_flattened_mut(),
+            magnitudes: self.magnitudes.as_flattened_mut(),
+            fields: self.fields.as_flattened_mut(),
+        }
     }
 }
 
 /// Working memory the caller owns, for windows of a width chosen at run
-/// time (a host's tile as wide as the frame): four slices, each at least
+/// time (a host's tile as wide as the frame): five slices, each at least
 /// its [`MemorySize`] for the window.
 pub struct Slices<'m> {
     cols: usize,
     words: &'m mut [i32],
     halves: &'m mut [i16],
     bytes: &'m mut [u8],
-    pixels: &'m mut [FlowPixel],
+    magnitudes: &'m mut [U32F32],
+    fields: &'m mut [I16F16],
 }
 
 impl Memory for Slices<'_> {}
@@ -193,13 +176,14 @@ impl memory::Carve for Slices<'_> {
     }
 
     #[inline(always)]
-    fn planes(&mut self) -> (&mut [i32], &mut [i16], &mut [u8], &mut [FlowPixel]) {
-        (
-            &mut *self.words,
-            &mut *self.halves,
-            &mut *self.bytes,
-            &mut *self.pixels,
-        )
+    fn planes(&mut self) -> memory::Planes<'_> {
+        memory::Planes {
+            words: &mut *self.words,
+            halves: &mut *self.halves,
+            bytes: &mut *self.bytes,
+            magnitudes: &mut *self.magnitudes,
+            fields: &mut *self.fields,
+        }
     }
 }
 
@@ -212,8 +196,10 @@ pub struct MemorySize {
     pub halves: usize,
     /// `u8`s.
     pub bytes: usize,
-    /// [`FlowPixel`]s.
-    pub pixels: usize,
+    /// `U32F32`s (the output's magnitudes).
+    pub magnitudes: usize,
+    /// `I16F16`s (the output's fields).
+    pub fields: usize,
 }
 
 impl MemorySize {
@@ -228,7 +214,8 @@ impl MemorySize {
                 words,
                 halves: cols * HALF_ROWS,
                 bytes: cols * BYTE_ROWS,
-                pixels: cols,
+                magnitudes: cols * MAGNITUDE_ROWS,
+                fields: cols * FIELD_ROWS,
             }),
             None => None,
         }
@@ -274,8 +261,9 @@ impl<const COLS: usize> Engine<COLS> {
                 t: 0,
             },
             memory: Arrays {
+                magnitudes: [[U32F32::ZERO; COLS]; MAGNITUDE_ROWS],
                 words: [[0; COLS]; WORD_ROWS],
-                out: [FlowPixel::ZERO; COLS],
+                fields: [[I16F16::ZERO; COLS]; FIELD_ROWS],
                 halves: [[0; COLS]; HALF_ROWS],
                 bytes: [[0; COLS]; BYTE_ROWS],
             },
@@ -292,19 +280,21 @@ impl<const COLS: usize> Default for Engine<COLS> {
 impl<'m> SliceEngine<'m> {
     /// An engine in the caller's slices (each at least its
     /// [`MemorySize`]; longer is fine): tiles up to the widest window all
-    /// four hold, minus the 14-column halo. Fails with
+    /// five hold, minus the 14-column halo. Fails with
     /// [`Error::BufferTooShort`] (in `i32`s) when they hold no window wider
     /// than the halo.
     pub fn new(
         words: &'m mut [i32],
         halves: &'m mut [i16],
         bytes: &'m mut [u8],
-        pixels: &'m mut [FlowPixel],
+        magnitudes: &'m mut [U32F32],
+        fields: &'m mut [I16F16],
     ) -> Result<Self, Error> {
         let cols = (words.len() / WORD_ROWS)
             .min(halves.len() / HALF_ROWS)
             .min(bytes.len() / BYTE_ROWS)
-            .min(pixels.len());
+            .min(magnitudes.len() / MAGNITUDE_ROWS)
+            .min(fields.len() / FIELD_ROWS);
         if cols <= 2 * HALO {
             return Err(Error::BufferTooShort {
                 needed: (2 * HALO + 1) * WORD_ROWS,
@@ -318,7 +308,8 @@ impl<'m> SliceEngine<'m> {
                 words,
                 halves,
                 bytes,
-                pixels,
+                magnitudes,
+                fields,
             },
         })
     }
@@ -331,7 +322,10 @@ struct Rows<'m> {
     e: [RowRing<'m, i32, E_DEPTH>; 2],
     v: [RowRing<'m, i32, V_DEPTH>; 2],
     vert_e: [&'m mut [i32]; 2],
-    out: &'m mut [FlowPixel],
+    /// The output's `[|v_d|, |v_c|]`.
+    magnitudes: [&'m mut [U32F32]; MAGNITUDE_ROWS],
+    /// The output's `[v_c x, v_c y, v_d x, v_d y]`.
+    fields: [&'m mut [I16F16]; FIELD_ROWS],
     d: RowRing<'m, i16, D_DEPTH>,
     vert_d: [&'m mut [i16]; 4],
     p0: RowRing<'m, u8, P0_DEPTH>,
@@ -341,15 +335,14 @@ impl<'m> Rows<'m> {
     /// Rows of `cols` elements, in the order [`WORD_ROWS`] and its
     /// neighbours count them.
     #[inline(always)]
-    fn carve(
-        (mut words, mut halves, mut bytes, pixels): (
-            &'m mut [i32],
-            &'m mut [i16],
-            &'m mut [u8],
-            &'m mut [FlowPixel],
-        ),
-        cols: usize,
-    ) -> Self {
+    fn carve(planes: memory::Planes<'m>, cols: usize) -> Self {
+        let memory::Planes {
+            mut words,
+            mut halves,
+            mut bytes,
+            mut magnitudes,
+            mut fields,
+        } = planes;
         let words = &mut words;
         let halves = &mut halves;
         Self {
@@ -358,7 +351,8 @@ impl<'m> Rows<'m> {
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
             vert_e: take_rows(words, cols),
-            out: pixels,
+            magnitudes: take_rows(&mut magnitudes, cols),
+            fields: take_rows(&mut fields, cols),
             d: RowRing::carve(halves, cols),
             vert_d: take_rows(halves, cols),
             p0: RowRing::carve(&mut bytes, cols),
@@ -526,21 +520,48 @@ impl Pass<'_> {
         for (ring, out) in rows.sums.iter().zip(rows.products.iter_mut()) {
             vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
         }
-        let fields = sink.reads_fields();
+        let reads_fields = sink.reads_fields();
         let width = n.saturating_sub(2 * HALO);
         let tail_rows = TailRows {
             sums: rows.products.each_ref().map(|row| from_first_output(row)),
             v: [rows.v[0].row(o), rows.v[1].row(o)].map(from_first_output),
-            luma: from_first_output(rows.p0.row(o)),
         };
-        let out = rows.out.get_mut(..width).unwrap_or(&mut []);
-        tail_row(config, fields, &tail_rows, out);
+        let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_mut().map(|row| first_mut(row, width));
+        let out = TailOut {
+            m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
+            fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
+        };
+        tail_row(config, &tail_rows, out);
+        let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
+        let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
+        let pixels = Pixels {
+            m_d,
+            m_c,
+            luma: first(from_first_output(rows.p0.row(o)), width),
+            fields: reads_fields.then_some(Fields {
+                v_c: [v_c_x, v_c_y],
+                v_d: [v_d_x, v_d_y],
+            }),
+        };
         let (y, x) = (
             (y_first + o as isize) as usize,
             (x_first + HALO as isize) as usize,
         );
-        sink.row(y, x, rows.out.get(..width).unwrap_or(&[]));
+        sink.row(y, x, pixels);
     }
+}
+
+/// The first `width` values of a row (all the engine's rows are a
+/// window wide, so never fewer).
+#[inline(always)]
+fn first<T>(row: &[T], width: usize) -> &[T] {
+    row.get(..width).unwrap_or(&[])
+}
+
+/// [`first`], to write.
+#[inline(always)]
+fn first_mut<T>(row: &mut [T], width: usize) -> &mut [T] {
+    row.get_mut(..width).unwrap_or(&mut [])
 }
 
 /// A window row from the first output column (`HALO`) on.
@@ -598,18 +619,20 @@ fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d
 /// (budgets, the `budget` command): equal to `Engine::<cols>::WORKING_BYTES`.
 /// Per window column: the product rows (7 × 4 bytes), the sums' rings
 /// (7 × 5 × 4), the rings of `E` (2 × 5 × 4) and `V` (2 × 4 × 4), the
-/// vertical parts (2 × 4 + 4 × 2), the output pixel (40), and the rings of
-/// `d` (6 × 2) and `p0` (8 × 1): 316 bytes.
+/// vertical parts (2 × 4 + 4 × 2), the output's magnitudes (2 × 8) and
+/// fields (4 × 4), and the rings of `d` (6 × 2) and `p0` (8 × 1): 308
+/// bytes.
 pub const fn working_bytes(cols: usize) -> usize {
     use core::mem::{align_of, size_of};
     // repr(C): each field at the next multiple of its alignment, in order.
     const fn field(offset: usize, size: usize, align: usize) -> usize {
         offset.next_multiple_of(align) + size
     }
-    // The window, then the arrays (aligned like a pixel, as the window is).
+    // The window, then the arrays (aligned like a magnitude, as the window is).
     let mut end = size_of::<Window>();
+    end = field(end, MAGNITUDE_ROWS * 8 * cols, align_of::<U32F32>());
     end = field(end, WORD_ROWS * 4 * cols, 4);
-    end = field(end, size_of::<FlowPixel>() * cols, align_of::<FlowPixel>());
+    end = field(end, FIELD_ROWS * 4 * cols, 4);
     end = field(end, HALF_ROWS * 2 * cols, 2);
     end = field(end, BYTE_ROWS * cols, 1);
     end.next_multiple_of(align_of::<Window>())
@@ -627,7 +650,7 @@ mod tests {
         assert_eq!(working_bytes(142), Engine::<142>::WORKING_BYTES);
         assert_eq!(working_bytes(655), Engine::<655>::WORKING_BYTES);
         for cols in 15..40 {
-            assert!(working_bytes(cols) >= 316 * cols);
+            assert!(working_bytes(cols) >= 308 * cols);
         }
         assert_eq!(working_bytes(17), Engine::<17>::WORKING_BYTES);
         assert_eq!(working_bytes(33), Engine::<33>::WORKING_BYTES);

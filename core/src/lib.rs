@@ -27,14 +27,15 @@
 //!
 //! The computation is integer-only and deterministic: every target gives the
 //! same bytes. All working memory lives in one engine: an [`Engine`] whose
-//! size is a const generic (`COLS` window columns, about 316 bytes each), or
+//! size is a const generic (`COLS` window columns, about 308 bytes each), or
 //! a [`SliceEngine`] in slices the caller sizes at run time ([`MemorySize`]).
 //! Frames are cut into tiles ([`Plan`]); a tile wider than the engine's
 //! `COLS − 14` columns runs as several windows, and every tiling gives the
 //! same bytes. Sizes and parameters are checked once ([`Config`], [`Plan`],
 //! [`FramePair`], [`Job`], the sinks); after that nothing fails or panics.
 //! Other output goes through a [`Sink`], which sees each output row as
-//! [`FlowPixel`]s: the ready-made ones write field planes ([`FieldSink`]),
+//! [`Pixels`], a row per quantity (or [`FlowPixel`]s one at a time): the
+//! ready-made ones write field planes ([`FieldSink`]),
 //! the bytes ([`RgbSink`]) or the extremes ([`ExtremesSink`]).
 //!
 //! # Stability
@@ -42,7 +43,7 @@
 //! The stable surface is what the example uses and what a firmware or
 //! binding needs beside it: [`Engine`] and [`SliceEngine`] (with
 //! [`MemorySize`]), [`Plan`], [`Job`], [`FramePair`],
-//! [`Config`] and [`Params`], [`Sink`] and [`FlowPixel`], [`Error`] (the one
+//! [`Config`] and [`Params`], [`Sink`], [`Pixels`] and [`FlowPixel`], [`Error`] (the one
 //! error type), and the scaling ([`Scaling`], [`ByteScale`], [`represent`]).
 //! Changes to them follow semantic versioning; the bytes they produce change
 //! only with a SPEC change, recorded in the repository's golden files.
@@ -65,6 +66,7 @@ mod frames;
 mod isqrt;
 mod job;
 mod params;
+mod pixels;
 mod plan;
 mod reciprocal;
 mod represent;
@@ -84,17 +86,17 @@ mod tail;
 const VECTOR_ROWS: bool = cfg!(vector_rows);
 
 pub use engine::{
-    Arrays, Engine, FlowPixel, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine,
-    working_bytes,
+    Arrays, Engine, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine, working_bytes,
 };
 pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};
 pub use job::Job;
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
+pub use pixels::{Fields, FlowPixel, Pixels};
 pub use plan::{Plan, Tile, first_stage_pixels};
 pub use represent::{byte_scales, represent};
 pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
 pub use schedule::HALO;
-pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb};
+pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb, rgb_row};
 pub use stream::RowStream;

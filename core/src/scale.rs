@@ -167,8 +167,10 @@ impl ByteScale {
             let m = m.to_bits();
             let d = m.wrapping_sub(self.offset) & mask(m >= self.offset);
             let x = ((d >> self.shift) << up) & u64::from(u32::MAX);
-            let byte = (x * gain).wrapping_add(half) >> wide;
-            *out = (byte | mask(d > self.below_255)) as u8;
+            // A saturated lane's product is all ones: `≥ 2⁹ − 1` after the
+            // shift (`wide ≤ 55`), 255 after the cap, which is 32-bit wide.
+            let product = (x * gain).wrapping_add(half) | mask(d > self.below_255);
+            *out = ((product >> wide) as u32).min(255) as u8;
         }
         out
     }
@@ -213,6 +215,23 @@ impl Extremes {
     pub fn add(&mut self, m: U32F32) {
         self.min = self.min.min(m);
         self.max = self.max.max(m);
+    }
+
+    /// Take every value of `row` into account, both extremes in one loop.
+    /// Compared as signed integers with the top bit flipped (the same
+    /// order): AVX2 has a signed 64-bit compare only, and the flip is then
+    /// once per value instead of once per value and extreme.
+    #[inline(always)]
+    pub fn add_all(&mut self, row: &[U32F32]) {
+        const FLIP: u64 = 1 << 63;
+        let signed = |m: U32F32| (m.to_bits() ^ FLIP) as i64;
+        let (mut min, mut max) = (signed(self.min), signed(self.max));
+        for &m in row {
+            let m = signed(m);
+            (min, max) = (min.min(m), max.max(m));
+        }
+        let unsigned = |m: i64| U32F32::from_bits(m as u64 ^ FLIP);
+        (self.min, self.max) = (unsigned(min), unsigned(max));
     }
 
     /// Merge the extremes of another part of the frame.
@@ -325,6 +344,28 @@ mod tests {
                     assert_eq!(scale.fixed_byte(m), want, "{scale:?} m={m}");
                 }
             }
+        }
+    }
+
+    /// A row's extremes in one call are those of its values one by one,
+    /// across the top bit (the flipped compare) and from empty.
+    #[test]
+    fn extremes_of_a_row_are_its_values_one_by_one() {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        for len in 0..40 {
+            let row: std::vec::Vec<U32F32> = (0..len)
+                .map(|_| {
+                    s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                    U32F32::from_bits(s >> (s % 61))
+                })
+                .collect();
+            let (mut by_row, mut by_value) = (Extremes::EMPTY, Extremes::EMPTY);
+            by_row.add_all(&row[..len / 2]);
+            by_row.add_all(&row[len / 2..]);
+            for &m in &row {
+                by_value.add(m);
+            }
+            assert_eq!(by_row, by_value, "{row:?}");
         }
     }
 

@@ -2,7 +2,7 @@
 
 use fixed::types::{I16F16, U32F32};
 
-use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Sink};
+use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Pixels, Sink};
 
 /// Check that an output plane holds a whole frame.
 pub(crate) fn check_len(config: &Config, len: usize, per_pixel: usize) -> Result<(), Error> {
@@ -73,34 +73,34 @@ impl<'a> FieldSink<'a> {
     }
 }
 
+/// Copy one row of the segment into its plane, if the plane is asked for.
 fn write_plane<T: Copy>(
     plane: &mut Option<&mut [T]>,
     width: usize,
-    y: usize,
-    x: usize,
-    pixels: &[FlowPixel],
-    value: impl Fn(&FlowPixel) -> T,
+    (y, x): (usize, usize),
+    row: &[T],
 ) {
     if let Some(plane) = plane {
-        for (dst, px) in segment(plane, width, 1, y, x, pixels.len())
-            .iter_mut()
-            .zip(pixels)
-        {
-            *dst = value(px);
+        let out = segment(plane, width, 1, y, x, row.len());
+        if let Some(row) = row.get(..out.len()) {
+            out.copy_from_slice(row);
         }
     }
 }
 
 impl Sink for FieldSink<'_> {
     #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let (p, w) = (&mut self.planes, self.width);
-        write_plane(&mut p.v_c_x, w, y, x, pixels, |px| px.v_c[0]);
-        write_plane(&mut p.v_c_y, w, y, x, pixels, |px| px.v_c[1]);
-        write_plane(&mut p.v_d_x, w, y, x, pixels, |px| px.v_d[0]);
-        write_plane(&mut p.v_d_y, w, y, x, pixels, |px| px.v_d[1]);
-        write_plane(&mut p.m_c, w, y, x, pixels, |px| px.m_c);
-        write_plane(&mut p.m_d, w, y, x, pixels, |px| px.m_d);
+        // `reads_fields` is true, so the engine gives them.
+        if let Some(fields) = pixels.fields {
+            write_plane(&mut p.v_c_x, w, (y, x), fields.v_c[0]);
+            write_plane(&mut p.v_c_y, w, (y, x), fields.v_c[1]);
+            write_plane(&mut p.v_d_x, w, (y, x), fields.v_d[0]);
+            write_plane(&mut p.v_d_y, w, (y, x), fields.v_d[1]);
+        }
+        write_plane(&mut p.m_c, w, (y, x), pixels.m_c);
+        write_plane(&mut p.m_d, w, (y, x), pixels.m_d);
     }
 }
 
@@ -108,6 +108,16 @@ impl Sink for FieldSink<'_> {
 #[inline(always)]
 pub fn rgb(px: &FlowPixel, scale_d: &ByteScale, scale_c: &ByteScale) -> [u8; 3] {
     [scale_d.byte(px.m_d), scale_c.byte(px.m_c), px.luma]
+}
+
+/// [`rgb`] of every pixel of a row segment, into `out` (as many as the
+/// shorter has).
+#[inline(always)]
+pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out: &mut [[u8; 3]]) {
+    let values = pixels.m_d.iter().zip(pixels.m_c).zip(pixels.luma);
+    for (dst, ((&m_d, &m_c), &luma)) in out.iter_mut().zip(values) {
+        *dst = [scale_d.byte(m_d), scale_c.byte(m_c), luma];
+    }
 }
 
 /// A sink that writes the RGB8 representation into a row-major plane of
@@ -144,11 +154,10 @@ impl Sink for RgbSink<'_> {
     }
 
     #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let out = segment(self.rgb, self.width, 3, y, x, pixels.len());
-        for (dst, px) in out.chunks_exact_mut(3).zip(pixels) {
-            dst.copy_from_slice(&rgb(px, &self.scale_d, &self.scale_c));
-        }
+        let out = out.as_chunks_mut::<3>().0;
+        rgb_row(pixels, &self.scale_d, &self.scale_c, out);
     }
 }
 
@@ -181,10 +190,8 @@ impl Sink for ExtremesSink {
     }
 
     #[inline(always)]
-    fn row(&mut self, _y: usize, _x: usize, pixels: &[FlowPixel]) {
-        for px in pixels {
-            self.m_d.add(px.m_d);
-            self.m_c.add(px.m_c);
-        }
+    fn row(&mut self, _y: usize, _x: usize, pixels: Pixels<'_>) {
+        self.m_d.add_all(pixels.m_d);
+        self.m_c.add_all(pixels.m_c);
     }
 }

@@ -73,7 +73,7 @@ use core::fmt;
 use fixed::types::{I16F16, U16F16, U32F32};
 use heapless::Vec;
 
-use reynoldsflow_core::{Config, FlowPixel, Sink};
+use reynoldsflow_core::{Config, FlowPixel, Pixels, Sink};
 
 /// Which of the representation's two fields a cue or a view reads.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -589,19 +589,13 @@ impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize>
         found
     }
 
-    /// Accumulate one row segment whose magnitudes `magnitude` reads.
+    /// Accumulate one row segment's magnitudes.
     #[inline(always)]
-    fn accumulate(
-        &mut self,
-        y: usize,
-        x: usize,
-        pixels: &[FlowPixel],
-        magnitude: impl Fn(&FlowPixel) -> U32F32,
-    ) {
+    fn accumulate(&mut self, y: usize, x: usize, magnitudes: &[U32F32]) {
         let level = self.level;
         let mut row = self.cells.get_mut(y / CELL);
         let (mut seg_sum, mut seg_peak) = (0u64, 0u64);
-        let mut rest = pixels;
+        let mut rest = magnitudes;
         let mut x0 = x;
         while !rest.is_empty() {
             // The run of `rest` inside cell column x0 / CELL.
@@ -610,8 +604,8 @@ impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize>
                 break;
             };
             let mut acc = Cell::EMPTY;
-            for (k, px) in run.iter().enumerate() {
-                let m = magnitude(px).to_bits();
+            for (k, m) in run.iter().enumerate() {
+                let m = m.to_bits();
                 // From the engine m < 2^47.5, so m >> 16 < 2^31.5 and a row
                 // of ≤ 65535 px sums below 2^47.5 (saturating for any other
                 // input).
@@ -640,17 +634,22 @@ impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize>
         self.frame_peak = self.frame_peak.max(seg_peak);
         self.frame_pixels = self
             .frame_pixels
-            .saturating_add(u32::try_from(pixels.len()).unwrap_or(u32::MAX));
+            .saturating_add(u32::try_from(magnitudes.len()).unwrap_or(u32::MAX));
     }
 }
 
 impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize> Sink
     for MotionCues<CELL, GW, GH, N>
 {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    // Magnitudes only: the engine skips the fields' conversions.
+    fn reads_fields(&self) -> bool {
+        false
+    }
+
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         match self.params.field {
-            Field::DivergenceFree => self.accumulate(y, x, pixels, |px| px.m_d),
-            Field::CurlFree => self.accumulate(y, x, pixels, |px| px.m_c),
+            Field::DivergenceFree => self.accumulate(y, x, pixels.m_d),
+            Field::CurlFree => self.accumulate(y, x, pixels.m_c),
         }
     }
 }
@@ -711,6 +710,7 @@ fn keep_strongest<const N: usize>(list: &mut Vec<Region, N>, region: Region) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rows::Rows;
     use reynoldsflow_core::Params;
     use std::vec::Vec as StdVec;
 
@@ -746,7 +746,7 @@ mod tests {
                     let row: StdVec<FlowPixel> = (tx..(tx + tw).min(w))
                         .map(|x| px(image[y * w + x]))
                         .collect();
-                    cues.row(y, tx, &row);
+                    cues.row(y, tx, Rows::of(&row).pixels());
                 }
             }
         }
@@ -1052,7 +1052,7 @@ mod tests {
             ..FlowPixel::default()
         };
         for y in 0..h {
-            cues.row(y, 0, &[max; 64]);
+            cues.row(y, 0, Rows::of(&[max; 64]).pixels());
         }
         let r = cues.end_frame()[0];
         assert_eq!(r.area, 64 * 64);
@@ -1061,7 +1061,7 @@ mod tests {
         // Fed more than a frame, nothing panics.
         for _ in 0..3 {
             for y in 0..h {
-                cues.row(y, 0, &[max; 64]);
+                cues.row(y, 0, Rows::of(&[max; 64]).pixels());
             }
         }
         assert_eq!(cues.end_frame()[0].area, 3 * 64 * 64);

@@ -16,7 +16,7 @@ use core::f32::consts::PI;
 use fixed::types::I16F16;
 use micromath::F32Ext;
 
-use reynoldsflow_core::{ByteScale, Config, Error, FlowPixel, Sink, rgb};
+use reynoldsflow_core::{ByteScale, Config, Error, FlowPixel, Pixels, Sink, rgb};
 
 use crate::Field;
 
@@ -136,10 +136,16 @@ impl View {
 
     /// A row (or any run) of pixels into RGB565; `out` and `pixels` are
     /// paired up to the shorter of the two.
-    pub fn row565(&self, pixels: &[FlowPixel], out: &mut [u16]) {
+    pub fn row565(&self, pixels: impl IntoIterator<Item = FlowPixel>, out: &mut [u16]) {
         for (dst, px) in out.iter_mut().zip(pixels) {
-            *dst = self.rgb565(px);
+            *dst = self.rgb565(&px);
         }
+    }
+
+    /// Whether the view reads the fields (the direction wheel), not only
+    /// the magnitudes and `fⁿ`.
+    pub fn reads_fields(&self) -> bool {
+        matches!(self, View::Direction { .. })
     }
 }
 
@@ -176,10 +182,14 @@ impl<'a> Rgb565Sink<'a> {
 }
 
 impl Sink for Rgb565Sink<'_> {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn reads_fields(&self) -> bool {
+        self.view.reads_fields()
+    }
+
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let start = y * self.width + x;
         if let Some(out) = self.plane.get_mut(start..start + pixels.len()) {
-            self.view.row565(pixels, out);
+            self.view.row565(pixels.iter(), out);
         }
     }
 }
@@ -187,6 +197,7 @@ impl Sink for Rgb565Sink<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rows::Rows;
     use fixed::types::{U16F16, U32F32};
 
     fn exact_hsv(hue: f64, s: f64, v: f64) -> [f64; 3] {
@@ -315,8 +326,9 @@ mod tests {
             luma: l,
             ..FlowPixel::default()
         };
-        sink.row(1, 1, &[px(255), px(8)]);
-        sink.row(2, 3, &[px(255), px(255)]); // runs past the frame: ignored
+        sink.row(1, 1, Rows::of(&[px(255), px(8)]).pixels());
+        // Runs past the frame: ignored.
+        sink.row(2, 3, Rows::of(&[px(255), px(255)]).pixels());
         assert_eq!(plane[5], 0xFFFF);
         assert_eq!(plane[6], rgb565(8, 8, 8));
         assert_eq!(plane.iter().filter(|&&v| v != 0).count(), 2);

@@ -19,6 +19,8 @@ extern crate std;
 
 mod cues;
 mod display;
+#[cfg(test)]
+mod test_rows;
 
 pub use cues::{CueError, CueParams, Field, FrameLevel, MotionCues, Region, Threshold, grid_cells};
 pub use display::{HUE_STEPS, Rgb565Sink, View, direction_hue, hsv, rgb565};

@@ -6,9 +6,7 @@
 //! `cargo run -p reynoldsflow-examples`
 
 use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{
-    ByteScale, Config, Engine, Error, FlowPixel, Params, RowStream, Sink, rgb,
-};
+use reynoldsflow_core::{ByteScale, Config, Engine, Error, Params, Pixels, RowStream, Sink};
 
 const W: usize = 96;
 const H: usize = 48;
@@ -36,9 +34,14 @@ struct MotionMap {
 }
 
 impl Sink for MotionMap {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
-        for (k, px) in pixels.iter().enumerate() {
-            self.red[y * W + x + k] = rgb(px, &self.scale, &self.scale)[0];
+    // |v_d| only: the engine skips the fields' conversions.
+    fn reads_fields(&self) -> bool {
+        false
+    }
+
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
+        for (k, &m_d) in pixels.m_d.iter().enumerate() {
+            self.red[y * W + x + k] = self.scale.byte(m_d);
         }
     }
 }

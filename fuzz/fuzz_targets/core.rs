@@ -7,11 +7,11 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use fixed::types::{U16F16, U32F32};
+use fixed::types::{I16F16, U16F16, U32F32};
 use libfuzzer_sys::fuzz_target;
 use reynoldsflow_core::{
-    Arrays, Config, Engine, Error, ExtremesSink, FlowPixel, FramePair, IntensityScale,
-    MemorySize, Params, Plan, RgbSink, RowStream, Scaling, SliceEngine, represent,
+    Arrays, Config, Engine, Error, ExtremesSink, FramePair, IntensityScale, MemorySize, Params,
+    Plan, RgbSink, RowStream, Scaling, SliceEngine, represent,
 };
 
 /// Tiles up to 80 columns: the README's 640×480-in-32-KiB engine.
@@ -122,12 +122,23 @@ fuzz_target!(|case: Case| {
             );
             let size = MemorySize::for_tile_width(plan.tile_width()).expect("small sizes");
             let (mut words, mut halves) = (vec![0; size.words], vec![0; size.halves]);
-            let (mut bytes, mut pixels) = (vec![0; size.bytes], vec![FlowPixel::default(); size.pixels]);
-            let mut sliced = SliceEngine::new(&mut words, &mut halves, &mut bytes, &mut pixels)
-                .expect("memory of its size");
+            let mut bytes = vec![0; size.bytes];
+            let mut magnitudes = vec![U32F32::ZERO; size.magnitudes];
+            let mut fields = vec![I16F16::ZERO; size.fields];
+            let mut sliced = SliceEngine::new(
+                &mut words,
+                &mut halves,
+                &mut bytes,
+                &mut magnitudes,
+                &mut fields,
+            )
+            .expect("memory of its size");
             assert_eq!(sliced.max_tile_width(), plan.tile_width());
             represent(&mut sliced, &job, scaling, &mut tiled, ()).expect("checked");
-            assert!(tiled == whole, "tiles {tw}x{th} of {w}x{h} in slices differ");
+            assert!(
+                tiled == whole,
+                "tiles {tw}x{th} of {w}x{h} in slices differ"
+            );
         }
         Err(Error::TileOutOfFrame) => assert!(tw == 0 || th == 0),
         Err(e) => panic!("unexpected plan error {e:?}"),
@@ -184,17 +195,21 @@ fuzz_target!(|case: Case| {
     let (scale_d, scale_c) = scaling
         .byte_scales(|| {
             let mut extremes = ExtremesSink::default();
-            stream_pass(&mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
-                s.push(p, n, &mut extremes).expect("whole rows")
-            });
+            stream_pass(
+                &mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
+                    s.push(p, n, &mut extremes).expect("whole rows")
+                },
+            );
             Ok::<_, Error>(extremes)
         })
         .expect("infallible");
     let mut streamed = vec![0u8; 3 * w * h];
     let mut sink = RgbSink::new(&config, &mut streamed, scale_d, scale_c).expect("plane size");
-    stream_pass(&mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
-        s.push(p, n, &mut sink).expect("whole rows")
-    });
+    stream_pass(
+        &mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
+            s.push(p, n, &mut sink).expect("whole rows")
+        },
+    );
     assert!(
         streamed == whole,
         "row streams of {widths:?} over {w}x{h} differ"

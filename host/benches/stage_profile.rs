@@ -23,7 +23,7 @@ use std::time::Instant;
 
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{
-    Config, FlowPixel, FramePair, Job, Params, Plan, Scaling, Sink, SliceEngine, represent,
+    Config, FramePair, Job, Params, Pixels, Plan, Scaling, Sink, SliceEngine, represent,
 };
 
 mod common;
@@ -56,10 +56,10 @@ impl Digest {
 }
 
 impl Sink for Digest {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         self.eat(&(y as u64).to_le_bytes());
         self.eat(&(x as u64).to_le_bytes());
-        for px in pixels {
+        for px in pixels.iter() {
             for v in px.v_c.iter().chain(&px.v_d) {
                 self.eat(&v.to_bits().to_le_bytes());
             }

@@ -11,12 +11,12 @@
 //! one pair can also be spread over threads ([`pixels_on`], the element's
 //! latency path); every tiling gives the same bytes.
 
-use fixed::types::U32F32;
+use fixed::types::{I16F16, U32F32};
 use std::sync::Mutex;
 
 use reynoldsflow_core::{
-    ByteScale, Config, ExtremesSink, FlowPixel, FramePair, MemorySize, Params, Plan, Scaling, Sink,
-    SliceEngine, rgb,
+    ByteScale, Config, ExtremesSink, FlowPixel, FramePair, MemorySize, Params, Pixels, Plan,
+    Scaling, Sink, SliceEngine, rgb,
 };
 
 use crate::dispatch::{self, Isa, Pass};
@@ -49,7 +49,8 @@ pub struct HostEngine {
     words: Vec<i32>,
     halves: Vec<i16>,
     bytes: Vec<u8>,
-    pixels: Vec<FlowPixel>,
+    magnitudes: Vec<U32F32>,
+    fields: Vec<I16F16>,
 }
 
 impl HostEngine {
@@ -66,12 +67,14 @@ impl HostEngine {
         grow(&mut self.words, size.words, 0);
         grow(&mut self.halves, size.halves, 0);
         grow(&mut self.bytes, size.bytes, 0);
-        grow(&mut self.pixels, size.pixels, FlowPixel::default());
+        grow(&mut self.magnitudes, size.magnitudes, U32F32::ZERO);
+        grow(&mut self.fields, size.fields, I16F16::ZERO);
         Ok(SliceEngine::new(
             &mut self.words,
             &mut self.halves,
             &mut self.bytes,
-            &mut self.pixels,
+            &mut self.magnitudes,
+            &mut self.fields,
         )?)
     }
 }
@@ -141,7 +144,7 @@ impl<'a> PixelRows<'a> {
 }
 
 impl Sink for PixelRows<'_> {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let (x0, y0) = self.origin;
         let start = x.saturating_sub(x0);
         if let Some(dst) = self
@@ -149,7 +152,9 @@ impl Sink for PixelRows<'_> {
             .get_mut(y.saturating_sub(y0))
             .and_then(|row| row.get_mut(start..start + pixels.len()))
         {
-            dst.copy_from_slice(pixels);
+            for (dst, px) in dst.iter_mut().zip(pixels.iter()) {
+                *dst = px;
+            }
         }
         self.extremes.row(y, x, pixels);
     }
@@ -372,13 +377,7 @@ impl FrameEngine {
         };
         dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
         let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.extremes))?;
-        dispatch::kept_to_bytes(
-            self.isa,
-            &self.kept,
-            &prev.pixels,
-            rgb,
-            &[scale_d, scale_c],
-        );
+        dispatch::kept_to_bytes(self.isa, &self.kept, &prev.pixels, rgb, &[scale_d, scale_c]);
         Ok(())
     }
 }
@@ -428,8 +427,8 @@ impl Kept {
     }
 }
 
-/// The first step of per-frame min–max: each pixel's magnitudes into the
-/// kept planes, and the frame's extremes, in one loop over the engine's rows.
+/// The first step of per-frame min–max: each row's magnitudes into the
+/// kept planes, and the frame's extremes.
 struct KeptMagnitudes<'a> {
     width: usize,
     kept: &'a mut Kept,
@@ -442,16 +441,12 @@ impl Sink for KeptMagnitudes<'_> {
     }
 
     #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let start = y * self.width + x;
         let span = start..start + pixels.len();
-        let (kept_d, kept_c) = (&mut self.kept.m_d[span.clone()], &mut self.kept.m_c[span]);
-        let ExtremesSink { m_d, m_c } = &mut self.extremes;
-        for ((kept_d, kept_c), px) in kept_d.iter_mut().zip(kept_c).zip(pixels) {
-            (*kept_d, *kept_c) = (px.m_d, px.m_c);
-            m_d.add(px.m_d);
-            m_c.add(px.m_c);
-        }
+        self.kept.m_d[span.clone()].copy_from_slice(pixels.m_d);
+        self.kept.m_c[span].copy_from_slice(pixels.m_c);
+        self.extremes.row(y, x, pixels);
     }
 }
 

@@ -3,7 +3,7 @@
 
 pub mod corpus;
 
-use reynoldsflow_core::{Config, Engine, FlowPixel, FramePair, Plan, RowStream, Sink};
+use reynoldsflow_core::{Config, Engine, FlowPixel, FramePair, Pixels, Plan, RowStream, Sink};
 
 /// Columns of the test engine: tiles up to 200 px wide.
 pub const COLS: usize = 214;
@@ -33,9 +33,12 @@ impl PixelPlane {
 }
 
 impl Sink for PixelPlane {
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let start = y * self.width + x;
-        self.pixels[start..start + pixels.len()].copy_from_slice(pixels);
+        let out = &mut self.pixels[start..start + pixels.len()];
+        for (dst, px) in out.iter_mut().zip(pixels.iter()) {
+            *dst = px;
+        }
         self.rows.push((y, x, pixels.len()));
     }
 }

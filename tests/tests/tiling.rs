@@ -49,10 +49,10 @@ fn small_tiles_cover_every_pixel_once() {
 /// A camera's rows: output row `y` must leave once row `y + 7` is in.
 #[test]
 fn streamed_output_leaves_seven_rows_behind_the_input() {
-    use reynoldsflow_core::{FlowPixel, RowStream, Sink};
+    use reynoldsflow_core::{Pixels, RowStream, Sink};
     struct Log(Vec<usize>);
     impl Sink for Log {
-        fn row(&mut self, y: usize, _x: usize, _p: &[FlowPixel]) {
+        fn row(&mut self, y: usize, _x: usize, _p: Pixels<'_>) {
             self.0.push(y);
         }
     }

@@ -6,7 +6,7 @@
 //! not part of the computation), must be free of panic paths.
 
 use reynoldsflow_core::fixed::types::U16F16;
-use reynoldsflow_core::{ByteScale, Engine, FlowPixel, Job, Sink, rgb};
+use reynoldsflow_core::{ByteScale, Engine, Job, Pixels, Sink, rgb_row};
 use semihosting::fs::File;
 use semihosting::io::{Seek, SeekFrom, Write};
 
@@ -73,12 +73,10 @@ impl Sink for RgbRows<'_> {
         false
     }
 
-    fn row(&mut self, y: usize, x: usize, pixels: &[FlowPixel]) {
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let n = pixels.len().min(COLS);
-        let (row, pixels) = (&mut self.row[..n], &pixels[..n]);
-        for (dst, px) in row.iter_mut().zip(pixels) {
-            *dst = rgb(px, &self.scale_d, &self.scale_c);
-        }
+        let row = &mut self.row[..n];
+        rgb_row(pixels, &self.scale_d, &self.scale_c, row);
         rf_emit_row(self.harness, y, x, row);
     }
 }

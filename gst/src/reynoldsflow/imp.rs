@@ -18,7 +18,7 @@ use gst_base::subclass::prelude::*;
 use gst_video::VideoFormat;
 use gst_video::prelude::*;
 use reynoldsflow_core::fixed::types::U32F32;
-use reynoldsflow_core::{Config, Frame, MAX_SIDE, Params, Sink};
+use reynoldsflow_core::{Config, Frame, MAX_SIDE, Params, Pixels, Sink};
 use reynoldsflow_cues::Region;
 use reynoldsflow_host::cli::values::{self, ScaleArg};
 use reynoldsflow_host::pair_pool::PairPool;
@@ -648,8 +648,26 @@ impl ReynoldsFlow {
                 };
                 // Whole rows in raster order: the cues are the same for any
                 // order the engine's tiles would have given (core `cues` doc).
+                // The cues read the magnitudes only (`reads_fields` is false).
+                let (mut m_d, mut m_c, mut luma) = (Vec::new(), Vec::new(), Vec::new());
                 for (y, row) in pixels.pixels().chunks(width).enumerate() {
-                    sink.row(y, 0, row);
+                    m_d.clear();
+                    m_d.extend(row.iter().map(|p| p.m_d));
+                    m_c.clear();
+                    m_c.extend(row.iter().map(|p| p.m_c));
+                    luma.clear();
+                    luma.extend(row.iter().map(|p| p.luma));
+                    let fields = None;
+                    sink.row(
+                        y,
+                        0,
+                        Pixels {
+                            m_d: &m_d,
+                            m_c: &m_c,
+                            luma: &luma,
+                            fields,
+                        },
+                    );
                 }
                 let regions = sink.end_frame().to_vec();
                 Some((regions, sink.last_frame().level))
