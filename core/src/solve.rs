@@ -35,10 +35,45 @@ pub const FIELD_MAX_Q16: u64 = i32::MAX as u64;
 /// Magnitudes saturate at 2⁴⁸ − 1 in Q32.32 (65 536 px).
 pub const MAGNITUDE_MAX_Q32: u64 = (1 << 48) - 1;
 
-/// Number of significant bits of `x` (0 for 0).
+/// `x.leading_zeros()` for `x < 2²⁴` (32 for 0). On x86-64 from the
+/// exponent of `x` as an `f32` (exact below 2²⁴): `vcvtdq2ps` takes eight
+/// lanes, where AVX2 has no vector count and the compiler builds one from
+/// nibble lookups. `CLZ` elsewhere (the scalar boards, and NEON's vector
+/// form). Equal on the whole domain (`leading_zeros_below_2_24_is_clz`).
 #[inline(always)]
-fn bit_length(x: u64) -> i32 {
-    (u64::BITS - x.leading_zeros()) as i32
+fn leading_zeros_below_2_24(x: u32) -> u32 {
+    debug_assert!(x < 1 << 24);
+    if cfg!(target_arch = "x86_64") {
+        // Biased exponent `126 + bitlen(x)` for x > 0, 0 for x = 0; the
+        // conversion from `i32` is the one with a vector form.
+        let biased = (x as i32 as f32).to_bits() >> 23;
+        (158 - biased).min(32)
+    } else {
+        x.leading_zeros()
+    }
+}
+
+/// `x.leading_zeros()` for `x < 2⁶³` (64 for 0), on x86-64 from an `f64`
+/// exponent as [`leading_zeros_below_2_24`]: `t = 2·(x >> s) + 1 < 2⁵²`
+/// (`s = 12` from 2⁵¹ on, else 0) is exact as the bits of `2⁵² + t` less
+/// 2⁵² (AVX2 converts no 64-bit integer; this is an `or` and a subtract),
+/// and `bitlen(x) = bitlen(t) − 1 + s`. Equal on the whole domain
+/// (`leading_zeros_below_2_63_is_clz`, around every power of two).
+#[inline(always)]
+fn leading_zeros_below_2_63(x: u64) -> u32 {
+    debug_assert!(x < 1 << 63);
+    if cfg!(target_arch = "x86_64") {
+        const TWO_52: u64 = 0x4330_0000_0000_0000;
+        // 64-bit lanes throughout (a signed compare: x < 2⁶³), no packing.
+        let s = if x as i64 >= 1 << 51 { 12 } else { 0 };
+        let t = ((x >> s) << 1) | 1;
+        let exact = f64::from_bits(TWO_52 | t) - f64::from_bits(TWO_52);
+        // Biased exponent `1022 + bitlen(t)`.
+        let bitlen_t = exact.to_bits() >> 52;
+        (1087 - bitlen_t - s) as u32
+    } else {
+        x.leading_zeros()
+    }
 }
 
 /// `prod · 2^shift` rounded to nearest (half up), saturating at `max`.
@@ -95,7 +130,7 @@ impl Squares {
     #[inline(always)]
     pub fn of(x: u64, y: u64) -> Self {
         // `& 63`: the zero vector shifts by 0 and stays 0.
-        let lz = (x | y).leading_zeros() & 63;
+        let lz = leading_zeros_below_2_63(x | y) & 63;
         let (x, y) = (((x << lz) >> 40) as u32, ((y << lz) >> 40) as u32);
         Self {
             radicand: mul(x, x) + mul(y, y),
@@ -113,7 +148,7 @@ impl Squares {
         let [x, y] = v.map(i32::unsigned_abs);
         // Top bit to bit 23: `|V| ≤ 6 854 400 < 2²³` (`stages`), so
         // `lz ≥ 9` and the shift is up to the left (up to 24 for zero).
-        let lz = (x | y).leading_zeros();
+        let lz = leading_zeros_below_2_24(x | y);
         let (x, y) = (x << lz.saturating_sub(8), y << lz.saturating_sub(8));
         Self {
             radicand: mul(x, x) + mul(y, y),
@@ -191,10 +226,10 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
     let (p, q) = (join(s.p), join(s.q));
     // τ = max(0, bitlen(|p| | |q|) − 31), the bit length of the part above
     // bit 31, which fits 32-bit lanes (`|p| ≤ 2³¹·2¹⁴ + 2³¹ < 2⁴⁶` for any
-    // words, `< 2⁴⁵` as the engine sums them): twice as wide
-    // as 64-bit ones in AVX2, and one `CLZ` on 32-bit targets.
+    // words, `< 2⁴⁵` as the engine sums them, so `above < 2¹⁵`): twice as
+    // wide as 64-bit ones in AVX2, and one `CLZ` on 32-bit targets.
     let above = ((p.unsigned_abs() | q.unsigned_abs()) >> 31) as u32;
-    let tau = u32::BITS - above.leading_zeros();
+    let tau = u32::BITS - leading_zeros_below_2_24(above);
     // Toward zero, so the solve stays odd in (p, q); `|P′|, |Q′| < 2³¹`, so
     // the products below are 32×32 → 64 (which targets and vectors have).
     let cut = |v: i64| -> i64 {
@@ -203,11 +238,12 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
     };
     let (p, q) = (cut(p), cut(q));
     // det's top 32 bits; det ≥ Λ4² ≥ 1, so the shift is below 64.
-    let d32 = (det << det.leading_zeros()) >> 32;
+    let lz = leading_zeros_below_2_63(det);
+    let d32 = (det << lz) >> 32;
     Solved {
         n: [c4 * p - b4 * q, a4 * q - b4 * p],
         det32: d32 as u32,
-        exp: tau as i32 + config.dn_shift as i32 - 31 - bit_length(det),
+        exp: tau as i32 + config.dn_shift as i32 - 31 - (64 - lz as i32),
     }
 }
 
@@ -220,7 +256,7 @@ pub fn solve(config: &Config, s: StructureSums) -> Solved {
 pub fn divergence_free_q16(config: &Config, solved: &Solved, rd: u32) -> [i32; 2] {
     solved.n.map(|n| {
         let mag = n.unsigned_abs();
-        let lz = mag.leading_zeros() & 63;
+        let lz = leading_zeros_below_2_63(mag) & 63;
         let n31 = ((mag << lz) >> 33) as u32;
         let m1 = (mul(n31, rd) >> 32) as u32;
         // n = n31·2^(b−31); n31·rd ≈ m1·2³²; times 2^exp · k.mant·2^(−k.exp) · 2¹⁶.
@@ -245,6 +281,36 @@ pub fn divergence_free_magnitude_q32(config: &Config, exp: i32, rd: u32, r: u32,
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// The count from the `f64` exponent is `CLZ` at zero and on both
+    /// sides of every power of two below 2⁶³, and at random values.
+    #[test]
+    fn leading_zeros_below_2_63_is_clz() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for bit in 0..63 {
+            let p = 1u64 << bit;
+            for v in [p - 1, p, p + 1, p | (p - 1), p | (p >> 1)] {
+                assert_eq!(leading_zeros_below_2_63(v), v.leading_zeros(), "{v}");
+            }
+            for _ in 0..1000 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                let v = x >> (1 + (x % 63));
+                assert_eq!(leading_zeros_below_2_63(v), v.leading_zeros(), "{v}");
+            }
+        }
+        assert_eq!(leading_zeros_below_2_63(0), 64);
+        assert_eq!(leading_zeros_below_2_63((1 << 63) - 1), 1);
+    }
+
+    /// The count from the `f32` exponent is `CLZ` on its whole domain.
+    #[test]
+    fn leading_zeros_below_2_24_is_clz() {
+        for x in 0..1u32 << 24 {
+            assert_eq!(leading_zeros_below_2_24(x), x.leading_zeros(), "{x}");
+        }
+    }
     use crate::isqrt::isqrt;
     use crate::reciprocal::reciprocal;
 
