@@ -98,5 +98,5 @@ pub use plan::{Plan, Tile, first_stage_pixels};
 pub use represent::{byte_scales, represent};
 pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
 pub use schedule::HALO;
-pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RgbSink, rgb, rgb_row};
+pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RGB_BATCH, RgbSink, rgb, rgb_batch, rgb_row};
 pub use stream::RowStream;
