@@ -36,6 +36,7 @@ pub struct FlowPixel {
 
 /// The fields of an output row segment, one row per component.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Fields<'a> {
     /// `v_c` x and y (see [`FlowPixel::v_c`]).
     pub v_c: [&'a [I16F16]; 2],
@@ -46,6 +47,7 @@ pub struct Fields<'a> {
 /// One output row segment: pixels `[x, x + len)` of a frame row, each
 /// quantity a row of `len` values (the engine makes them equally long).
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Pixels<'a> {
     /// `|v_d|` (see [`FlowPixel::m_d`]).
     pub m_d: &'a [U32F32],

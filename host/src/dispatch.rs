@@ -33,33 +33,16 @@ pub enum Pass<'a> {
     Represent(Scaling, &'a mut [u8]),
 }
 
-impl Pass<'_> {
-    #[inline(always)]
-    fn run<M: Memory, S: Sink>(
-        self,
-        engine: &mut TileEngine<M>,
-        plan: &Plan,
-        frames: &FramePair<'_>,
-        sink: &mut S,
-    ) -> Result<(), Error> {
-        let job = plan.bind(*frames)?;
-        match self {
-            Pass::All => {
-                engine.run(&job, sink);
-                Ok(())
-            }
-            Pass::Tile(index) => {
-                let tile = engine.run_tile(&job, index, sink);
-                tile.map(|_| ()).ok_or(Error::TileOutOfFrame)
-            }
-            Pass::Represent(scaling, rgb) => {
-                reynoldsflow_core::represent(engine, &job, scaling, rgb, sink)
-            }
-        }
-    }
-}
-
 /// Run `pass` of `engine` over `frames` into `sink`, compiled for `isa`.
+///
+/// Each kind of pass is a function of its own, for either compilation: a
+/// function holding all three compiles one stack frame for all of them,
+/// and when the `represent` path grew (its bytes in lanes), `run` with
+/// per-frame min–max (the `All` path) ran 1.15× slower side by side for
+/// the same instruction count (`farm-bench`; `perf` put the time on the
+/// tail's batch copies in that frame). Each binds its job itself: a job
+/// passed in by reference kept the tail from vector lanes (its parameters
+/// reloaded from memory the output rows might alias: 2× the instructions).
 pub fn run<M: Memory, S: Sink>(
     isa: Isa,
     engine: &mut TileEngine<M>,
@@ -68,10 +51,64 @@ pub fn run<M: Memory, S: Sink>(
     pass: Pass<'_>,
     sink: &mut S,
 ) -> Result<(), Error> {
-    match isa {
-        Isa::Best => run_best(engine, plan, frames, pass, sink),
-        Isa::Portable => pass.run(engine, plan, frames, sink),
+    let best = isa == Isa::Best;
+    match pass {
+        Pass::All if best => all_best(engine, plan, frames, sink),
+        Pass::All => baseline(|| all(engine, plan, frames, sink)),
+        Pass::Tile(index) if best => tile_best(engine, plan, frames, index, sink),
+        Pass::Tile(index) => baseline(|| tile(engine, plan, frames, index, sink)),
+        Pass::Represent(scaling, rgb) if best => {
+            represent_best(engine, plan, frames, (scaling, rgb), sink)
+        }
+        Pass::Represent(scaling, rgb) => {
+            baseline(|| represent(engine, plan, frames, (scaling, rgb), sink))
+        }
     }
+}
+
+/// A pass compiled for the baseline, out of line: a function of its own
+/// for each kind of pass (each closure is a type of its own).
+#[inline(never)]
+fn baseline<R>(pass: impl FnOnce() -> R) -> R {
+    pass()
+}
+
+/// Every tile of the plan (inlined into [`baseline`] and [`all_best`]).
+#[inline(always)]
+fn all<M: Memory, S: Sink>(
+    engine: &mut TileEngine<M>,
+    plan: &Plan,
+    frames: &FramePair<'_>,
+    sink: &mut S,
+) -> Result<(), Error> {
+    engine.run(&plan.bind(*frames)?, sink);
+    Ok(())
+}
+
+/// Tile `index` of the plan ([`baseline`], [`tile_best`]).
+#[inline(always)]
+fn tile<M: Memory, S: Sink>(
+    engine: &mut TileEngine<M>,
+    plan: &Plan,
+    frames: &FramePair<'_>,
+    index: usize,
+    sink: &mut S,
+) -> Result<(), Error> {
+    let tile = engine.run_tile(&plan.bind(*frames)?, index, sink);
+    tile.map(|_| ()).ok_or(Error::TileOutOfFrame)
+}
+
+/// The core's `represent` in this scaling into this RGB frame
+/// ([`baseline`], [`represent_best`]).
+#[inline(always)]
+fn represent<M: Memory, S: Sink>(
+    engine: &mut TileEngine<M>,
+    plan: &Plan,
+    frames: &FramePair<'_>,
+    (scaling, rgb): (Scaling, &mut [u8]),
+    sink: &mut S,
+) -> Result<(), Error> {
+    reynoldsflow_core::represent(engine, &plan.bind(*frames)?, scaling, rgb, sink)
 }
 
 /// The second step of per-frame min–max (`fixed_engine::bytes_from_kept`),
@@ -98,14 +135,33 @@ macro_rules! best_targets {
 }
 
 best_targets! {
-    fn run_best<M: Memory, S: Sink>(
+    fn all_best<M: Memory, S: Sink>(
         engine: &mut TileEngine<M>,
         plan: &Plan,
         frames: &FramePair<'_>,
-        pass: Pass<'_>,
         sink: &mut S,
     ) -> Result<(), Error> {
-        pass.run(engine, plan, frames, sink)
+        all(engine, plan, frames, sink)
+    }
+
+    fn tile_best<M: Memory, S: Sink>(
+        engine: &mut TileEngine<M>,
+        plan: &Plan,
+        frames: &FramePair<'_>,
+        index: usize,
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        tile(engine, plan, frames, index, sink)
+    }
+
+    fn represent_best<M: Memory, S: Sink>(
+        engine: &mut TileEngine<M>,
+        plan: &Plan,
+        frames: &FramePair<'_>,
+        pass: (Scaling, &mut [u8]),
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        represent(engine, plan, frames, pass, sink)
     }
 
     fn kept_to_bytes_best(
