@@ -67,7 +67,10 @@ pub fn run<M: Memory, S: Sink>(
 }
 
 /// A pass compiled for the baseline, out of line: a function of its own
-/// for each kind of pass (each closure is a type of its own).
+/// for each kind of pass (each closure is a type of its own). The best
+/// targets' clones below cannot take a closure the same way (it stayed a
+/// baseline call: `run` ran 3× the instructions), so each repeats its
+/// pass's signature.
 #[inline(never)]
 fn baseline<R>(pass: impl FnOnce() -> R) -> R {
     pass()
