@@ -107,7 +107,13 @@ impl Sink for FieldSink<'_> {
 /// The representation's bytes `[R, G, B] = [|v_d|, |v_c|, fⁿ]` of one pixel.
 #[inline(always)]
 pub fn rgb(px: &FlowPixel, scale_d: &ByteScale, scale_c: &ByteScale) -> [u8; 3] {
-    [scale_d.byte(px.m_d), scale_c.byte(px.m_c), px.luma]
+    rgb_of(px.m_d, px.m_c, px.luma, [scale_d, scale_c])
+}
+
+/// [`rgb`] from the three values it reads.
+#[inline(always)]
+fn rgb_of(m_d: U32F32, m_c: U32F32, luma: u8, [scale_d, scale_c]: [&ByteScale; 2]) -> [u8; 3] {
+    [scale_d.byte(m_d), scale_c.byte(m_c), luma]
 }
 
 /// [`rgb`] of every pixel of a row segment, into `out` (as many as the
@@ -128,7 +134,7 @@ pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out
     }
     let values = m_d.iter().zip(m_c).zip(luma);
     for (dst, ((&m_d, &m_c), &luma)) in out.iter_mut().zip(values) {
-        *dst = [scale_d.byte(m_d), scale_c.byte(m_c), luma];
+        *dst = rgb_of(m_d, m_c, luma, [scale_d, scale_c]);
     }
 }
 

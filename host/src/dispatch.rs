@@ -9,7 +9,9 @@
 
 use multiversion::multiversion;
 use multiversion::target::target_cfg_f;
-use reynoldsflow_core::{ByteScale, Error, FramePair, Memory, Plan, Scaling, Sink, TileEngine};
+use reynoldsflow_core::{
+    ByteScale, Error, FramePair, Job, Memory, Plan, Scaling, Sink, TileEngine,
+};
 
 use crate::fixed_engine::{Kept, bytes_from_kept};
 
@@ -35,14 +37,13 @@ pub enum Pass<'a> {
 
 /// Run `pass` of `engine` over `frames` into `sink`, compiled for `isa`.
 ///
-/// Each kind of pass is a function of its own, for either compilation: a
-/// function holding all three compiles one stack frame for all of them,
-/// and when the `represent` path grew (its bytes in lanes), `run` with
-/// per-frame min–max (the `All` path) ran 1.15× slower side by side for
-/// the same instruction count (`farm-bench`; `perf` put the time on the
-/// tail's batch copies in that frame). Each binds its job itself: a job
-/// passed in by reference kept the tail from vector lanes (its parameters
-/// reloaded from memory the output rows might alias: 2× the instructions).
+/// Each kind of pass is a type of its own ([`Kind`]), so each compiles as a
+/// function of its own, in either compilation: a function holding all
+/// three compiles one stack frame for all of them, and when the
+/// `represent` path grew (its bytes in lanes), `run` with per-frame
+/// min–max (the `All` path) ran 1.15× slower side by side for the same
+/// instruction count (`farm-bench`; `perf` put the time on the tail's
+/// batch copies in that frame).
 pub fn run<M: Memory, S: Sink>(
     isa: Isa,
     engine: &mut TileEngine<M>,
@@ -51,67 +52,102 @@ pub fn run<M: Memory, S: Sink>(
     pass: Pass<'_>,
     sink: &mut S,
 ) -> Result<(), Error> {
-    let best = isa == Isa::Best;
     match pass {
-        Pass::All if best => all_best(engine, plan, frames, sink),
-        Pass::All => baseline(|| all(engine, plan, frames, sink)),
-        Pass::Tile(index) if best => tile_best(engine, plan, frames, index, sink),
-        Pass::Tile(index) => baseline(|| tile(engine, plan, frames, index, sink)),
-        Pass::Represent(scaling, rgb) if best => {
-            represent_best(engine, plan, frames, (scaling, rgb), sink)
-        }
+        Pass::All => compiled(isa, All, engine, plan, frames, sink),
+        Pass::Tile(index) => compiled(isa, TileAt(index), engine, plan, frames, sink),
         Pass::Represent(scaling, rgb) => {
-            baseline(|| represent(engine, plan, frames, (scaling, rgb), sink))
+            let kind = RepresentInto(scaling, rgb);
+            compiled(isa, kind, engine, plan, frames, sink)
         }
     }
 }
 
-/// A pass compiled for the baseline, out of line: a function of its own
-/// for each kind of pass (each closure is a type of its own). The best
-/// targets' clones below cannot take a closure the same way (it stayed a
-/// baseline call: `run` ran 3× the instructions), so each repeats its
-/// pass's signature.
+/// One kind of pass over a bound job.
+trait Kind {
+    fn pass<M: Memory, S: Sink>(
+        self,
+        engine: &mut TileEngine<M>,
+        job: &Job<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error>;
+}
+
+/// Every tile of the plan.
+struct All;
+
+/// Tile `index` of the plan.
+struct TileAt(usize);
+
+/// The core's `represent` in this scaling into this RGB frame.
+struct RepresentInto<'a>(Scaling, &'a mut [u8]);
+
+impl Kind for All {
+    #[inline(always)]
+    fn pass<M: Memory, S: Sink>(
+        self,
+        engine: &mut TileEngine<M>,
+        job: &Job<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        engine.run(job, sink);
+        Ok(())
+    }
+}
+
+impl Kind for TileAt {
+    #[inline(always)]
+    fn pass<M: Memory, S: Sink>(
+        self,
+        engine: &mut TileEngine<M>,
+        job: &Job<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        let tile = engine.run_tile(job, self.0, sink);
+        tile.map(|_| ()).ok_or(Error::TileOutOfFrame)
+    }
+}
+
+impl Kind for RepresentInto<'_> {
+    #[inline(always)]
+    fn pass<M: Memory, S: Sink>(
+        self,
+        engine: &mut TileEngine<M>,
+        job: &Job<'_>,
+        sink: &mut S,
+    ) -> Result<(), Error> {
+        reynoldsflow_core::represent(engine, job, self.0, self.1, sink)
+    }
+}
+
+/// `kind` compiled for `isa`.
+#[inline(always)]
+fn compiled<K: Kind, M: Memory, S: Sink>(
+    isa: Isa,
+    kind: K,
+    engine: &mut TileEngine<M>,
+    plan: &Plan,
+    frames: &FramePair<'_>,
+    sink: &mut S,
+) -> Result<(), Error> {
+    match isa {
+        Isa::Best => best(kind, engine, plan, frames, sink),
+        Isa::Portable => baseline(kind, engine, plan, frames, sink),
+    }
+}
+
+/// `kind` compiled for the baseline, out of line; [`best`] inlines it into
+/// its clones. The job is bound here, not passed in: a job behind a
+/// reference kept the tail out of vector lanes (its parameters reloaded
+/// from memory the output rows might alias: 2× the instructions).
 #[inline(never)]
-fn baseline<R>(pass: impl FnOnce() -> R) -> R {
-    pass()
-}
-
-/// Every tile of the plan (inlined into [`baseline`] and [`all_best`]).
-#[inline(always)]
-fn all<M: Memory, S: Sink>(
+fn baseline<K: Kind, M: Memory, S: Sink>(
+    kind: K,
     engine: &mut TileEngine<M>,
     plan: &Plan,
     frames: &FramePair<'_>,
     sink: &mut S,
 ) -> Result<(), Error> {
-    engine.run(&plan.bind(*frames)?, sink);
-    Ok(())
-}
-
-/// Tile `index` of the plan ([`baseline`], [`tile_best`]).
-#[inline(always)]
-fn tile<M: Memory, S: Sink>(
-    engine: &mut TileEngine<M>,
-    plan: &Plan,
-    frames: &FramePair<'_>,
-    index: usize,
-    sink: &mut S,
-) -> Result<(), Error> {
-    let tile = engine.run_tile(&plan.bind(*frames)?, index, sink);
-    tile.map(|_| ()).ok_or(Error::TileOutOfFrame)
-}
-
-/// The core's `represent` in this scaling into this RGB frame
-/// ([`baseline`], [`represent_best`]).
-#[inline(always)]
-fn represent<M: Memory, S: Sink>(
-    engine: &mut TileEngine<M>,
-    plan: &Plan,
-    frames: &FramePair<'_>,
-    (scaling, rgb): (Scaling, &mut [u8]),
-    sink: &mut S,
-) -> Result<(), Error> {
-    reynoldsflow_core::represent(engine, &plan.bind(*frames)?, scaling, rgb, sink)
+    kind.pass(engine, &plan.bind(*frames)?, sink)
 }
 
 /// The second step of per-frame min–max (`fixed_engine::bytes_from_kept`),
@@ -138,33 +174,16 @@ macro_rules! best_targets {
 }
 
 best_targets! {
-    fn all_best<M: Memory, S: Sink>(
+    /// `kind` compiled for the best targets (a clone of [`baseline`]'s body:
+    /// each clone must hold the code it runs).
+    fn best<K: Kind, M: Memory, S: Sink>(
+        kind: K,
         engine: &mut TileEngine<M>,
         plan: &Plan,
         frames: &FramePair<'_>,
         sink: &mut S,
     ) -> Result<(), Error> {
-        all(engine, plan, frames, sink)
-    }
-
-    fn tile_best<M: Memory, S: Sink>(
-        engine: &mut TileEngine<M>,
-        plan: &Plan,
-        frames: &FramePair<'_>,
-        index: usize,
-        sink: &mut S,
-    ) -> Result<(), Error> {
-        tile(engine, plan, frames, index, sink)
-    }
-
-    fn represent_best<M: Memory, S: Sink>(
-        engine: &mut TileEngine<M>,
-        plan: &Plan,
-        frames: &FramePair<'_>,
-        pass: (Scaling, &mut [u8]),
-        sink: &mut S,
-    ) -> Result<(), Error> {
-        represent(engine, plan, frames, pass, sink)
+        kind.pass(engine, &plan.bind(*frames)?, sink)
     }
 
     fn kept_to_bytes_best(

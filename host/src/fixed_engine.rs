@@ -405,7 +405,17 @@ pub(crate) fn bytes_from_kept(kept: &Kept, luma: &[u8], rgb: &mut [u8], scales: 
     let start = luma.len() * BYTE_BATCH;
     let rest = (start..).zip(luma_rest);
     for (out, (i, &luma)) in out_rest.iter_mut().zip(rest) {
-        *out = [scale_d.byte(m_d.get(i)), scale_c.byte(m_c.get(i)), luma];
+        let (m_d, m_c) = (m_d.get(i), m_c.get(i));
+        *out = reynoldsflow_core::rgb(
+            &FlowPixel {
+                m_d,
+                m_c,
+                luma,
+                ..FlowPixel::default()
+            },
+            scale_d,
+            scale_c,
+        );
     }
 }
 
