@@ -147,8 +147,9 @@ impl ByteScale {
         ((product >> 32) as u32 >> (wide - 32)) as u8
     }
 
-    /// [`Self::byte`] of `N` magnitudes, in the form vector lanes take (the
-    /// host's per-frame min–max byte step): every step in 64-bit lanes with
+    /// [`Self::byte`] of `N` magnitudes, in the form vector lanes take
+    /// ([`rgb_batch`](crate::rgb_batch): the RGB sink where rows take lanes,
+    /// the host's per-frame min–max byte step): every step in 64-bit lanes with
     /// shifts common to all lanes, no early return. Where `d ≤ below_255`,
     /// `x = (d >> shift) << (wide − frac) < 2³²` as in [`Self::byte`], so its
     /// low word is all of it (one 32×32→64 multiply, `vpmuludq`) and
