@@ -37,7 +37,7 @@ pub enum Pass<'a> {
 
 /// Run `pass` of `engine` over `frames` into `sink`, compiled for `isa`.
 ///
-/// Each kind of pass is a type of its own ([`Kind`]), so each compiles as a
+/// Each kind of pass is a type of its own (`Kind`), so each compiles as a
 /// function of its own, in either compilation: a function holding all
 /// three compiles one stack frame for all of them, and when the
 /// `represent` path grew (its bytes in lanes), `run` with per-frame
