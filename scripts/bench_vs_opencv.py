@@ -184,7 +184,7 @@ def main():
     ap.add_argument("--seconds", type=float, default=0.6, help="minimum time of one block")
     ap.add_argument("--sizes", default="640x480,1280x720")
     ap.add_argument("--cli", help="path of the reynoldsflow binary: also time `reynoldsflow run`")
-    ap.add_argument("--run-rounds", type=int, default=3, help="A/B rounds of the `run` rows")
+    ap.add_argument("--run-rounds", type=int, default=6, help="A/B rounds of the `run` rows")
     ap.add_argument("--only-run", action="store_true", help="time the `run` rows only")
     args = ap.parse_args()
     os.makedirs(args.frames, exist_ok=True)

@@ -12,8 +12,6 @@
 //! Because each stage depends only on its inputs, not on where the window
 //! starts, every tiling yields the same bytes as one whole-frame window.
 
-use fixed::types::{I16F16, U32F32};
-
 use crate::ring::{RowRing, take_rows};
 use crate::schedule::{
     D_DEPTH, E_DEPTH, E_LAG, E_RADIUS, E_START, HALO, OUTPUT_LAG, OUTPUT_START, P0_DEPTH,
@@ -21,9 +19,10 @@ use crate::schedule::{
     V_START,
 };
 use crate::stages::{
-    CHANNELS, ResidualInputs, boundary_minus_domain, smooth, structure_row, vertical_binomial,
+    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, StructureRows, boundary_minus_domain, smooth,
+    structure_row, vertical_binomial,
 };
-use crate::tail::{TailOut, TailRows, tail_row};
+use crate::tail::{TailConstants, TailOut, TailRows, tail_row};
 use crate::{Config, Error, Fields, Job, Pixels, Tile};
 
 /// Where output goes: one call per output row of a tile, in top-to-bottom
@@ -90,9 +89,10 @@ pub(crate) struct Window {
 }
 
 /// The rows a window of `cols` columns computes in, per [`Memory`] kind:
-/// 32-bit words, 16-bit halves, bytes, and the output's magnitudes and
-/// fields.
-const WORD_ROWS: usize = CHANNELS + CHANNELS * SUM_DEPTH + 2 * E_DEPTH + 2 * V_DEPTH + 2;
+/// 32-bit integer words, `f32`s (the `f32` structure channels and the
+/// output's magnitudes and fields), 16-bit halves and bytes.
+const WORD_ROWS: usize = INT_CHANNELS + INT_CHANNELS * SUM_DEPTH + 2 * E_DEPTH + 2 * V_DEPTH + 2;
+const FLOAT_ROWS: usize = FLOAT_CHANNELS + FLOAT_CHANNELS * SUM_DEPTH + MAGNITUDE_ROWS + FIELD_ROWS;
 const HALF_ROWS: usize = D_DEPTH + 4;
 const BYTE_ROWS: usize = P0_DEPTH;
 const MAGNITUDE_ROWS: usize = 2;
@@ -105,15 +105,12 @@ const FIELD_ROWS: usize = 4;
 pub trait Memory: memory::Carve {}
 
 mod memory {
-    use fixed::types::{I16F16, U32F32};
-
-    /// The memory as five planes, one per element type.
+    /// The memory as four planes, one per element type.
     pub struct Planes<'a> {
         pub words: &'a mut [i32],
+        pub floats: &'a mut [f32],
         pub halves: &'a mut [i16],
         pub bytes: &'a mut [u8],
-        pub magnitudes: &'a mut [U32F32],
-        pub fields: &'a mut [I16F16],
     }
 
     /// The memory as planes, and the window columns it holds.
@@ -124,13 +121,12 @@ mod memory {
 }
 
 /// Working memory for windows of up to `COLS` columns, as arrays:
-/// `308 · COLS` bytes and a few more ([`working_bytes`]). `repr(C)`, widest
+/// `252 · COLS` bytes and a few more ([`working_bytes`]). `repr(C)`, widest
 /// fields first, so [`working_bytes`] can follow the layout.
 #[repr(C)]
 pub struct Arrays<const COLS: usize> {
-    magnitudes: [[U32F32; COLS]; MAGNITUDE_ROWS],
     words: [[i32; COLS]; WORD_ROWS],
-    fields: [[I16F16; COLS]; FIELD_ROWS],
+    floats: [[f32; COLS]; FLOAT_ROWS],
     halves: [[i16; COLS]; HALF_ROWS],
     bytes: [[u8; COLS]; BYTE_ROWS],
 }
@@ -147,24 +143,22 @@ impl<const COLS: usize> memory::Carve for Arrays<COLS> {
     fn planes(&mut self) -> memory::Planes<'_> {
         memory::Planes {
             words: self.words.as_flattened_mut(),
+            floats: self.floats.as_flattened_mut(),
             halves: self.halves.as_flattened_mut(),
             bytes: self.bytes.as_flattened_mut(),
-            magnitudes: self.magnitudes.as_flattened_mut(),
-            fields: self.fields.as_flattened_mut(),
         }
     }
 }
 
 /// Working memory the caller owns, for windows of a width chosen at run
-/// time (a host's tile as wide as the frame): five slices, each at least
+/// time (a host's tile as wide as the frame): four slices, each at least
 /// its [`MemorySize`] for the window.
 pub struct Slices<'m> {
     cols: usize,
     words: &'m mut [i32],
+    floats: &'m mut [f32],
     halves: &'m mut [i16],
     bytes: &'m mut [u8],
-    magnitudes: &'m mut [U32F32],
-    fields: &'m mut [I16F16],
 }
 
 impl Memory for Slices<'_> {}
@@ -179,10 +173,9 @@ impl memory::Carve for Slices<'_> {
     fn planes(&mut self) -> memory::Planes<'_> {
         memory::Planes {
             words: &mut *self.words,
+            floats: &mut *self.floats,
             halves: &mut *self.halves,
             bytes: &mut *self.bytes,
-            magnitudes: &mut *self.magnitudes,
-            fields: &mut *self.fields,
         }
     }
 }
@@ -192,14 +185,12 @@ impl memory::Carve for Slices<'_> {
 pub struct MemorySize {
     /// `i32`s.
     pub words: usize,
+    /// `f32`s.
+    pub floats: usize,
     /// `i16`s.
     pub halves: usize,
     /// `u8`s.
     pub bytes: usize,
-    /// `U32F32`s (the output's magnitudes).
-    pub magnitudes: usize,
-    /// `I16F16`s (the output's fields).
-    pub fields: usize,
 }
 
 impl MemorySize {
@@ -212,10 +203,9 @@ impl MemorySize {
         match cols.checked_mul(WORD_ROWS) {
             Some(words) => Some(Self {
                 words,
+                floats: cols * FLOAT_ROWS,
                 halves: cols * HALF_ROWS,
                 bytes: cols * BYTE_ROWS,
-                magnitudes: cols * MAGNITUDE_ROWS,
-                fields: cols * FIELD_ROWS,
             }),
             None => None,
         }
@@ -261,9 +251,8 @@ impl<const COLS: usize> Engine<COLS> {
                 t: 0,
             },
             memory: Arrays {
-                magnitudes: [[U32F32::ZERO; COLS]; MAGNITUDE_ROWS],
                 words: [[0; COLS]; WORD_ROWS],
-                fields: [[I16F16::ZERO; COLS]; FIELD_ROWS],
+                floats: [[0.0; COLS]; FLOAT_ROWS],
                 halves: [[0; COLS]; HALF_ROWS],
                 bytes: [[0; COLS]; BYTE_ROWS],
             },
@@ -280,21 +269,19 @@ impl<const COLS: usize> Default for Engine<COLS> {
 impl<'m> SliceEngine<'m> {
     /// An engine in the caller's slices (each at least its
     /// [`MemorySize`]; longer is fine): tiles up to the widest window all
-    /// five hold, minus the 14-column halo. Fails with
+    /// four hold, minus the 14-column halo. Fails with
     /// [`Error::BufferTooShort`] (in `i32`s) when they hold no window wider
     /// than the halo.
     pub fn new(
         words: &'m mut [i32],
+        floats: &'m mut [f32],
         halves: &'m mut [i16],
         bytes: &'m mut [u8],
-        magnitudes: &'m mut [U32F32],
-        fields: &'m mut [I16F16],
     ) -> Result<Self, Error> {
         let cols = (words.len() / WORD_ROWS)
+            .min(floats.len() / FLOAT_ROWS)
             .min(halves.len() / HALF_ROWS)
-            .min(bytes.len() / BYTE_ROWS)
-            .min(magnitudes.len() / MAGNITUDE_ROWS)
-            .min(fields.len() / FIELD_ROWS);
+            .min(bytes.len() / BYTE_ROWS);
         if cols <= 2 * HALO {
             return Err(Error::BufferTooShort {
                 needed: (2 * HALO + 1) * WORD_ROWS,
@@ -306,10 +293,9 @@ impl<'m> SliceEngine<'m> {
             memory: Slices {
                 cols,
                 words,
+                floats,
                 halves,
                 bytes,
-                magnitudes,
-                fields,
             },
         })
     }
@@ -317,42 +303,60 @@ impl<'m> SliceEngine<'m> {
 
 /// The engine's rows, carved from its memory for one window width.
 struct Rows<'m> {
-    products: [&'m mut [i32]; CHANNELS],
-    sums: [RowRing<'m, i32, SUM_DEPTH>; CHANNELS],
+    int_products: [&'m mut [i32]; INT_CHANNELS],
+    int_sums: [RowRing<'m, i32, SUM_DEPTH>; INT_CHANNELS],
     e: [RowRing<'m, i32, E_DEPTH>; 2],
     v: [RowRing<'m, i32, V_DEPTH>; 2],
-    vert_e: [&'m mut [i32]; 2],
+    /// `E` before its horizontal smoothing (the ring keeps it smoothed).
+    e_scratch: [&'m mut [i32]; 2],
+    float_products: [&'m mut [f32]; FLOAT_CHANNELS],
+    float_sums: [RowRing<'m, f32, SUM_DEPTH>; FLOAT_CHANNELS],
     /// The output's `[|v_d|, |v_c|]`.
-    magnitudes: [&'m mut [U32F32]; MAGNITUDE_ROWS],
+    magnitudes: [&'m mut [f32]; MAGNITUDE_ROWS],
     /// The output's `[v_c x, v_c y, v_d x, v_d y]`.
-    fields: [&'m mut [I16F16]; FIELD_ROWS],
+    fields: [&'m mut [f32]; FIELD_ROWS],
     d: RowRing<'m, i16, D_DEPTH>,
     vert_d: [&'m mut [i16]; 4],
     p0: RowRing<'m, u8, P0_DEPTH>,
 }
 
 impl<'m> Rows<'m> {
+    /// The vertical G of the five sums centred on window row `o`, into the
+    /// product rows (free by then).
+    #[cfg_attr(feature = "profile", inline(never))]
+    #[cfg_attr(not(feature = "profile"), inline(always))]
+    fn structure_sums(&mut self, o: usize, n: usize) {
+        for (ring, out) in self.int_sums.iter().zip(self.int_products.iter_mut()) {
+            vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
+        }
+        for (ring, out) in self.float_sums.iter().zip(self.float_products.iter_mut()) {
+            vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
+        }
+    }
+
     /// Rows of `cols` elements, in the order [`WORD_ROWS`] and its
     /// neighbours count them.
     #[inline(always)]
     fn carve(planes: memory::Planes<'m>, cols: usize) -> Self {
         let memory::Planes {
             mut words,
+            mut floats,
             mut halves,
             mut bytes,
-            mut magnitudes,
-            mut fields,
         } = planes;
         let words = &mut words;
+        let floats = &mut floats;
         let halves = &mut halves;
         Self {
-            products: take_rows(words, cols),
-            sums: core::array::from_fn(|_| RowRing::carve(words, cols)),
+            int_products: take_rows(words, cols),
+            int_sums: core::array::from_fn(|_| RowRing::carve(words, cols)),
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
-            vert_e: take_rows(words, cols),
-            magnitudes: take_rows(&mut magnitudes, cols),
-            fields: take_rows(&mut fields, cols),
+            e_scratch: take_rows(words, cols),
+            float_products: take_rows(floats, cols),
+            float_sums: core::array::from_fn(|_| RowRing::carve(floats, cols)),
+            magnitudes: take_rows(floats, cols),
+            fields: take_rows(floats, cols),
             d: RowRing::carve(halves, cols),
             vert_d: take_rows(halves, cols),
             p0: RowRing::carve(&mut bytes, cols),
@@ -469,9 +473,11 @@ impl Pass<'_> {
         );
         if t >= E_START {
             let [ex, ey] = &mut rows.e;
+            let [scratch_x, scratch_y] = &mut rows.e_scratch;
             boundary_minus_domain(
                 rows.d.rows(t - 2 * E_RADIUS),
                 &mut rows.vert_d,
+                (scratch_x, scratch_y),
                 (ex.row_mut(t - E_LAG), ey.row_mut(t - E_LAG)),
                 n,
             );
@@ -480,12 +486,7 @@ impl Pass<'_> {
             let first = t - V_LAG - V_RADIUS;
             let e = [rows.e[0].rows(first), rows.e[1].rows(first)];
             let [vx, vy] = &mut rows.v;
-            smooth(
-                e,
-                &mut rows.vert_e,
-                (vx.row_mut(t - V_LAG), vy.row_mut(t - V_LAG)),
-                n,
-            );
+            smooth(e, (vx.row_mut(t - V_LAG), vy.row_mut(t - V_LAG)), n);
         }
         if t >= PRODUCT_START {
             let j = t - PRODUCT_LAG;
@@ -497,8 +498,13 @@ impl Pass<'_> {
                 kappa: config.kappa_split(),
                 shift: config.dn_shift,
             };
-            let sums = rows.sums.each_mut().map(|ring| ring.row_mut(j));
-            structure_row(&input, &mut rows.products, sums, n);
+            let structure = StructureRows {
+                int_products: &mut rows.int_products,
+                float_products: &mut rows.float_products,
+                int_sums: rows.int_sums.each_mut().map(|ring| ring.row_mut(j)),
+                float_sums: rows.float_sums.each_mut().map(|ring| ring.row_mut(j)),
+            };
+            structure_row(&input, structure, n);
         }
         if t >= OUTPUT_START {
             self.emit(config, t - OUTPUT_LAG, sink);
@@ -516,14 +522,18 @@ impl Pass<'_> {
             ..
         } = *self.window;
         let rows = &mut self.rows;
-        // The vertical G of the seven sums, into the product rows (free now).
-        for (ring, out) in rows.sums.iter().zip(rows.products.iter_mut()) {
-            vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
-        }
+        rows.structure_sums(o, n);
         let reads_fields = sink.reads_fields();
         let width = n.saturating_sub(2 * HALO);
         let tail_rows = TailRows {
-            sums: rows.products.each_ref().map(|row| from_first_output(row)),
+            abc: rows
+                .int_products
+                .each_ref()
+                .map(|row| from_first_output(row)),
+            pq: rows
+                .float_products
+                .each_ref()
+                .map(|row| from_first_output(row)),
             v: [rows.v[0].row(o), rows.v[1].row(o)].map(from_first_output),
         };
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_mut().map(|row| first_mut(row, width));
@@ -531,7 +541,11 @@ impl Pass<'_> {
             m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
             fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
         };
-        tail_row(config, &tail_rows, out);
+        let constants = TailConstants {
+            lambda4: config.lambda4,
+            units: config.units(),
+        };
+        tail_row(&constants, &tail_rows, out);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
         let pixels = Pixels {
@@ -552,22 +566,24 @@ impl Pass<'_> {
 }
 
 /// The first `width` values of a row (all the engine's rows are a
-/// window wide, so never fewer).
+/// window wide, so never fewer). Split within clamped bounds, so the
+/// result always points into the row (see `RowRing::row`).
 #[inline(always)]
 fn first<T>(row: &[T], width: usize) -> &[T] {
-    row.get(..width).unwrap_or(&[])
+    row.split_at(width.min(row.len())).0
 }
 
 /// [`first`], to write.
 #[inline(always)]
 fn first_mut<T>(row: &mut [T], width: usize) -> &mut [T] {
-    row.get_mut(..width).unwrap_or(&mut [])
+    let width = width.min(row.len());
+    row.split_at_mut(width).0
 }
 
 /// A window row from the first output column (`HALO`) on.
 #[inline(always)]
 fn from_first_output<T>(row: &[T]) -> &[T] {
-    row.get(HALO..).unwrap_or(&[])
+    row.split_at(HALO.min(row.len())).1
 }
 
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the
@@ -617,10 +633,10 @@ fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d
 
 /// Working bytes of an `Engine<cols>`, for choosing `COLS` at run time
 /// (budgets, the `budget` command): equal to `Engine::<cols>::WORKING_BYTES`.
-/// Per window column: the product rows (7 × 4 bytes), the sums' rings
-/// (7 × 5 × 4), the rings of `E` (2 × 5 × 4) and `V` (2 × 4 × 4), the
-/// vertical parts (2 × 4 + 4 × 2), the output's magnitudes (2 × 8) and
-/// fields (4 × 4), and the rings of `d` (6 × 2) and `p0` (8 × 1): 308
+/// Per window column: the product rows (5 × 4 bytes), the sums' rings
+/// (5 × 5 × 4), the rings of `E` (2 × 5 × 4) and `V` (2 × 4 × 4), the
+/// vertical parts (2 × 4 + 4 × 2), the output's magnitudes (2 × 4) and
+/// fields (4 × 4), and the rings of `d` (6 × 2) and `p0` (8 × 1): 252
 /// bytes.
 pub const fn working_bytes(cols: usize) -> usize {
     use core::mem::{align_of, size_of};
@@ -628,11 +644,10 @@ pub const fn working_bytes(cols: usize) -> usize {
     const fn field(offset: usize, size: usize, align: usize) -> usize {
         offset.next_multiple_of(align) + size
     }
-    // The window, then the arrays (aligned like a magnitude, as the window is).
+    // The window, then the arrays.
     let mut end = size_of::<Window>();
-    end = field(end, MAGNITUDE_ROWS * 8 * cols, align_of::<U32F32>());
     end = field(end, WORD_ROWS * 4 * cols, 4);
-    end = field(end, FIELD_ROWS * 4 * cols, 4);
+    end = field(end, FLOAT_ROWS * 4 * cols, 4);
     end = field(end, HALF_ROWS * 2 * cols, 2);
     end = field(end, BYTE_ROWS * cols, 1);
     end.next_multiple_of(align_of::<Window>())
@@ -650,7 +665,7 @@ mod tests {
         assert_eq!(working_bytes(142), Engine::<142>::WORKING_BYTES);
         assert_eq!(working_bytes(655), Engine::<655>::WORKING_BYTES);
         for cols in 15..40 {
-            assert!(working_bytes(cols) >= 308 * cols);
+            assert!(working_bytes(cols) >= 252 * cols);
         }
         assert_eq!(working_bytes(17), Engine::<17>::WORKING_BYTES);
         assert_eq!(working_bytes(33), Engine::<33>::WORKING_BYTES);

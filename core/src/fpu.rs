@@ -1,139 +1,158 @@
-//! Exact integer floors from the FPU's correctly rounded `f64` operations,
-//! for the targets whose FPU has them (x86-64, aarch64), written so that a
-//! batch of them vectorises (the per-pixel tail takes them eight at a time,
-//! `tail.rs`): integers enter `f64` through the 2⁵² magic number (an OR and
-//! a subtraction, exact below 2⁵²) and leave it the same way, rounded to
-//! nearest, because AVX2 has no vector conversion between 64-bit integers
-//! and `f64` (the compiler takes `as` one lane at a time). Each caller
-//! then corrects the nearest integer to the exact floor with one integer
-//! test, so the result is the same integer the Newton forms give on
-//! targets without an FPU. On 32-bit Arm with the hard-float ABI (the M4F,
-//! whose FPU has no `f64`) only the `f32` root, which `isqrt` corrects the
-//! same way.
+//! The correctly rounded `f32` square root (IEEE 754's `squareRoot`), the
+//! one operation of the tail (`tail.rs`) that `core` does not provide on
+//! stable Rust. Every form below rounds correctly, so every target gives
+//! the same bits:
+//! - x86-64: SSE's `sqrtss` through its intrinsic, which the compiler
+//!   takes into vector lanes with the loop around it (`vsqrtps` in the
+//!   host's AVX2 pass); `libm`'s form is inline assembly, which stops the
+//!   vectoriser (and a legacy-SSE root amid AVX code once made the whole
+//!   pass 5.5× slower);
+//! - aarch64: NEON's `fsqrt` through its intrinsic, for the same reason;
+//! - 32-bit Arm with the hard-float ABI (the M4F): `VSQRT.F32` in `asm!`
+//!   (`core::arch` has no scalar VFP root);
+//! - elsewhere (M0, RV32: no FPU): `libm`'s software `sqrtf`.
+//!
+//! The intrinsics are `unsafe` only because they carry `#[target_feature]`
+//! (SSE and NEON are part of their targets' baselines).
+//!
+//! And the byte of a clamped value ([`byte`]): on x86-64 a conversion
+//! without Rust's saturating checks, which the compiler takes one lane at a
+//! time there.
 
-/// 2⁵²: adding it to `0 ≤ x < 2⁵²` leaves `round(x)` in the mantissa bits.
-#[cfg(fpu_f64)]
-const TWO_52: f64 = 4_503_599_627_370_496.0;
-
-/// `n` as `f64`, exactly, for `n < 2⁵²` (the caller's bound).
-#[cfg(fpu_f64)]
-#[inline(always)]
-pub fn exact(n: u64) -> f64 {
-    f64::from_bits(TWO_52.to_bits() | n) - TWO_52
-}
-
-/// `x` rounded to the nearest integer (ties to even), for `0 ≤ x < 2⁵²`.
-#[cfg(fpu_f64)]
-#[inline(always)]
-pub fn nearest(x: f64) -> u64 {
-    (x + TWO_52).to_bits() & ((1 << 52) - 1)
-}
-
-/// The correctly rounded `f64` root (`core` has no stable `sqrt`). On
-/// x86-64 through the SSE2 intrinsic, which the compiler encodes for the
-/// code around it (`vsqrtpd` across a batch inside the host's AVX2 pass):
-/// `libm`'s root is an inline-assembly legacy `sqrtsd`, and that, amid AVX
-/// code, made `reynoldsflow run` 5.5× slower per pair on this project's
-/// AMD EPYC (3.0 s against 0.55 s for 30 pairs at 640×480) although it ran
-/// fewer instructions. The intrinsics are `unsafe` only because they carry
-/// `#[target_feature]`.
+/// `√x`, correctly rounded.
 #[inline(always)]
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
-pub fn sqrt(x: f64) -> f64 {
-    use core::arch::x86_64::{_mm_cvtsd_f64, _mm_set_sd, _mm_sqrt_pd};
-    // SAFETY: SSE2 is part of every x86-64 target (the baseline), and these
+pub fn sqrt(x: f32) -> f32 {
+    use core::arch::x86_64::{_mm_cvtss_f32, _mm_set_ss, _mm_sqrt_ss};
+    // SAFETY: SSE is part of every x86-64 target (the baseline), and these
     // intrinsics touch registers only.
-    unsafe { _mm_cvtsd_f64(_mm_sqrt_pd(_mm_set_sd(x))) }
+    unsafe { _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(x))) }
 }
 
-/// The correctly rounded `f64` root: `libm`'s is the `fsqrt` instruction.
+/// `√x`, correctly rounded.
 #[inline(always)]
 #[cfg(target_arch = "aarch64")]
-pub fn sqrt(x: f64) -> f64 {
-    libm::sqrt(x)
+#[allow(unsafe_code)]
+pub fn sqrt(x: f32) -> f32 {
+    use core::arch::aarch64::{vdup_n_f32, vget_lane_f32, vsqrt_f32};
+    // SAFETY: NEON is part of every aarch64 target (the baseline), and
+    // these intrinsics touch registers only.
+    unsafe { vget_lane_f32::<0>(vsqrt_f32(vdup_n_f32(x))) }
 }
 
-/// `⌊512·√a⌋` from the correctly rounded `f32` root, `VSQRT.F32` (every
-/// Arm FPU of the hard-float ABI has it; `core` has no `sqrt` on stable and
-/// `libm`'s is software on 32-bit Arm): `a` enters `f32` rounded to nearest
-/// as the fixed-point `a/2¹⁴`, leaves truncated as the fixed point of
-/// `√(a/2¹⁴)·2¹⁶` (power-of-two scalings, exact), so the value is that of
-/// `((a as f32).sqrt() * 512.0) as u32` on any IEEE machine.
+/// `√x`, correctly rounded: `VSQRT.F32` (every Arm FPU of the hard-float
+/// ABI has it). Rust's `sreg` operands need double-precision `vfp2`, which
+/// the M4F lacks, so the value crosses in a core register and `s15` is
+/// named as clobbered (an explicit register, which needs no feature).
 #[inline(always)]
 #[cfg(fpu_f32)]
 #[allow(unsafe_code)]
-pub fn root_512(a: u32) -> u32 {
+pub fn sqrt(x: f32) -> f32 {
     let root: u32;
-    // SAFETY: FPU instructions on `s0`, saved and restored around them on
-    // the stack (Rust's `sreg` operands need double-precision `vfp2`, which
-    // the M4F does not have); no memory of the program's, no flags the
-    // compiler relies on (`VSQRT` and `VCVT` set only the FPSCR's
-    // cumulative exception bits).
+    // SAFETY: one FPU instruction on `s15`, declared clobbered; no memory
+    // of the program's, no flags the compiler relies on (`VSQRT` and
+    // `VMOV` set only the FPSCR's cumulative exception bits).
     unsafe {
         core::arch::asm!(
-            "vpush {{s0}}",
-            "vmov s0, {a}",
-            "vcvt.f32.u32 s0, s0, #14",
-            "vsqrt.f32 s0, s0",
-            "vcvt.u32.f32 s0, s0, #16",
-            "vmov {root}, s0",
-            "vpop {{s0}}",
-            a = in(reg) a,
+            "vmov s15, {x}",
+            "vsqrt.f32 s15, s15",
+            "vmov {root}, s15",
+            x = in(reg) x.to_bits(),
             root = lateout(reg) root,
-            options(pure, nomem, preserves_flags),
+            out("s15") _,
+            options(pure, nomem, nostack, preserves_flags),
         );
     }
-    root
+    f32::from_bits(root)
 }
 
-/// `⌊2³¹ / (f32 d / 2³²)⌋`, saturating, from the correctly rounded `f32`
-/// quotient, `VDIV.F32`: `d` enters rounded to nearest as the fixed point
-/// `d/2³²`, the quotient leaves truncated as the fixed point of `·2³¹`
-/// (power-of-two scalings, exact), so the value is that of
-/// `(2³¹ · (1 / (d as f32 / 2³²))) as u32` on any IEEE machine.
+/// `√x`, correctly rounded, in software.
 #[inline(always)]
-#[cfg(fpu_f32)]
+#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64", fpu_f32)))]
+pub fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
+}
+
+/// `⌊t⌋` of `t` clamped to `[0, 255]` (NaN to 0): SPEC §4's
+/// `min(255, ⌊x · k + ½⌋)` for `t = x · k + ½`, 0 below. On x86-64 the
+/// conversion of the clamped value without Rust's saturating checks: the
+/// checked `t as u8` kept every lane of the AVX2 byte loops scalar (a
+/// compare-and-move per value: 193 instructions for 32 bytes, 57 this way).
+#[inline(always)]
+#[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
-pub fn quotient_2_63(d: u32) -> u32 {
-    let quotient: u32;
-    // SAFETY: as `root_512`, on `s0` and `s1`, saved and restored.
-    unsafe {
-        core::arch::asm!(
-            "vpush {{s0, s1}}",
-            "vmov s0, {d}",
-            "vcvt.f32.u32 s0, s0, #32",
-            "vmov.f32 s1, #1.0",
-            "vdiv.f32 s0, s1, s0",
-            "vcvt.u32.f32 s0, s0, #31",
-            "vmov {quotient}, s0",
-            "vpop {{s0, s1}}",
-            d = in(reg) d,
-            quotient = lateout(reg) quotient,
-            options(pure, nomem, preserves_flags),
-        );
-    }
-    quotient
+pub fn byte(t: f32) -> u8 {
+    // Selects that a NaN cannot pass: `NaN > 0` is false.
+    let t = if t > 0.0 { t } else { 0.0 };
+    let t = if t < 255.0 { t } else { 255.0 };
+    // SAFETY: `t` is finite and in `[0, 255]`, inside `i32`'s range, so the
+    // conversion (truncation toward zero) is defined.
+    let truncated: i32 = unsafe { t.to_int_unchecked() };
+    truncated as u8
+}
+
+/// [`byte`] elsewhere: Rust's saturating conversion (NaN to 0), which
+/// Arm's `VCVT` is, then the clamp in integers (`USAT`): two instructions
+/// on the M4 where the float clamps took eight.
+#[inline(always)]
+#[cfg(not(target_arch = "x86_64"))]
+pub fn byte(t: f32) -> u8 {
+    (t as i32).clamp(0, 255) as u8
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// The byte is the saturating conversion's on every kind of value.
     #[test]
-    fn integers_cross_exactly() {
-        let mut s = 0x2545_F491_4F6C_DD1Du64;
-        for i in 0..100_000u64 {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            let n = (s >> 12) >> (i % 52);
-            assert_eq!(exact(n), n as f64, "{n}");
-            assert_eq!(nearest(exact(n)), n, "{n}");
+    fn byte_is_the_saturating_conversion() {
+        let specials = [
+            0.0,
+            -0.0,
+            0.5,
+            1.0,
+            254.999,
+            255.0,
+            255.5,
+            1e30,
+            -3.0,
+            f32::NAN,
+        ];
+        for t in specials {
+            let want = t as u8;
+            assert_eq!(byte(t), want, "{t}");
         }
-        assert_eq!(nearest(2.5), 2);
-        assert_eq!(nearest(3.5), 4);
-        assert_eq!(nearest(7.499_999), 7);
-        assert_eq!(nearest(4_294_967_296.0), 1 << 32);
+        let mut s = 0x2545_F491u32;
+        for _ in 0..1_000_000 {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            let t = f32::from_bits(s);
+            if !t.is_nan() {
+                assert_eq!(byte(t), t as u8, "{t:e}");
+            }
+        }
+    }
+
+    /// The root is the correctly rounded one: at and around perfect
+    /// squares, and against `f64`'s root (exact before its one rounding to
+    /// `f32`, since 53 > 2·24 + 2) at random values of every exponent.
+    #[test]
+    fn sqrt_is_correctly_rounded() {
+        for r in 0..5000u32 {
+            let x = (r * r) as f32;
+            assert_eq!(sqrt(x), r as f32);
+        }
+        let mut s = 0x9E37_79B9u32;
+        for _ in 0..1_000_000 {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            let x = f32::from_bits(s & 0x7F7F_FFFF);
+            assert_eq!(sqrt(x), (f64::from(x)).sqrt() as f32, "{x:e}");
+        }
+        assert_eq!(sqrt(0.0).to_bits(), 0);
     }
 }

@@ -11,12 +11,13 @@
 //! | `D`, as summed | `Dn′ = round(Dn / 2^σ)` | `2^σ · s² / 6144` |
 //! | `a, b, c` | `A = G256 ⋆ X²`, … | `s² / 16384` |
 //! | `λ` | `Λ4 = 4 · λ · 16384 / s²` | `s² / 65536` |
-//! | `v_d` | `N / det` (see `solve`) | `2^σ · s / 192` |
+//! | `p, q` (as summed, `f32`) | `P = G256 ⋆ (X · Dn′ · 2⁻²⁰)`, … | `2^(σ+20) · s³ / 12 582 912` |
+//! | `v_d` | `N / det` (see `tail`) | `2^(σ+20) · s / 192` |
 //!
 //! Derived once in [`Config::new`], so the per-pixel path only multiplies
 //! and shifts. Only the integer rounding of `κ` and `Λ4`, the shift `σ` and
-//! the 32-bit mantissas of `s / 768` and `s / 192` depend on `s` and `λ`; at
-//! the default `s = 1/255`, `κ = 1 566 720` is exact and `σ = 8`.
+//! the `f32` units of `v_c` and `v_d` depend on `s` and `λ`; at the default
+//! `s = 1/255`, `κ = 1 566 720` is exact and `σ = 8`.
 
 use fixed::types::U32F32;
 
@@ -114,33 +115,35 @@ pub struct Config {
     /// `σ`: `Dn` is summed as `Dn′ = round(Dn / 2^σ)`, the smallest shift
     /// that keeps `|Dn′| ≤ 2²⁷` for every input ([`residual_shift`]).
     pub(crate) dn_shift: u32,
-    /// `s · 2¹⁶ / 768 ≈ c.mant · 2^−c.exp`: turns `V` into Q16.16 pixels.
-    pub(crate) c: Mantissa,
-    /// `s / 192 ≈ k.mant · 2^−k.exp`: turns `N / det · 2^σ` into pixels.
-    pub(crate) k: Mantissa,
+    /// The per-pixel tail's `f32` constants ([`Units`]), as bits (so the
+    /// configuration stays `Eq`).
+    units: [u32; 3],
 }
 
-/// A positive constant as `mant · 2^−exp` with `mant ∈ [2³¹, 2³²)`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub(crate) struct Mantissa {
-    pub(crate) mant: u32,
-    pub(crate) exp: u32,
+/// The `f32` constants of the per-pixel tail (`tail.rs`), each the `f64`
+/// quotient of exact integers rounded once to `f32` (so every target,
+/// hardware or software floats, derives the same bits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Units {
+    /// Pixels per unit of `V`: `s / 768`.
+    pub(crate) v_c: f32,
+    /// Pixels per unit of `N / det`: `2^(σ+20) · s / 192`.
+    pub(crate) v_d: f32,
+    /// The least determinant, `Λ4²` (as `f32`, rounded): `det ≥ Λ4²` in
+    /// exact arithmetic, and the tail clamps its rounded `det` to it.
+    pub(crate) det_floor: f32,
 }
 
-impl Mantissa {
-    /// `num / den` (both below 2⁴⁰), normalised, truncated: relative error < 2⁻³¹.
-    fn of(num: u128, den: u128) -> Self {
-        let mut exp = 31u32;
-        while (num << exp) / den >= 1 << 32 {
-            exp -= 1;
-        }
-        while (num << exp) / den < 1 << 31 {
-            exp += 1;
-        }
+impl Units {
+    fn of(num: u32, den: u32, sigma: u32, lambda4: i32) -> Self {
+        let (num, den) = (f64::from(num), f64::from(den));
+        // `num · 2^(σ+20)` and `192 · den` are exact in f64 (σ ≤ 14).
+        let v_d = num * (1u64 << (sigma + 20)) as f64 / (192.0 * den);
+        let lambda4 = lambda4 as f32;
         Self {
-            mant: ((num << exp) / den) as u32,
-            exp,
+            v_c: (num / (768.0 * den)) as f32,
+            v_d: v_d as f32,
+            det_floor: lambda4 * lambda4,
         }
     }
 }
@@ -179,18 +182,28 @@ impl Config {
         if lambda4 == 0 || lambda4 >= 1 << 30 {
             return Err(Error::LambdaOutOfRange);
         }
+        let dn_shift = residual_shift(kappa as u64);
+        let units = Units::of(params.scale.num, params.scale.den, dn_shift, lambda4 as i32);
         Ok(Self {
             width: w,
             height: h,
             params,
             kappa,
             lambda4: lambda4 as i32,
-            dn_shift: residual_shift(kappa as u64),
-            // s·2¹⁶/768 = 256·num / (3·den) ∈ [1.2e-4, 85.4].
-            c: Mantissa::of(256 * num, 3 * den),
-            // s/192 = num / (192·den).
-            k: Mantissa::of(num, 192 * den),
+            dn_shift,
+            units: [units.v_c, units.v_d, units.det_floor].map(f32::to_bits),
         })
+    }
+
+    /// The per-pixel tail's `f32` constants.
+    #[inline(always)]
+    pub(crate) fn units(&self) -> Units {
+        let [v_c, v_d, det_floor] = self.units.map(f32::from_bits);
+        Units {
+            v_c,
+            v_d,
+            det_floor,
+        }
     }
 
     /// `κ = κh·2^σ + κl` as `[κh, κl]`: `255·κh < 2²⁷`, `κl < 2^σ`.
@@ -229,11 +242,12 @@ mod tests {
         // 65536 · 1e-4 · 255² = 426 147.84; λ is 1e-4 to 6e-7.
         assert_eq!(c.lambda4, 426_148);
         assert_eq!(c.dn_shift, 8);
-        for (m, want) in [(c.c, 256.0 / (3.0 * 255.0)), (c.k, 1.0 / (192.0 * 255.0))] {
-            let got = m.mant as f64 / 2f64.powi(m.exp as i32);
-            assert!((got / want - 1.0).abs() < 1e-9);
-            assert!(m.mant >= 1 << 31);
+        let units = c.units();
+        let want_d = 2f64.powi(28) / (192.0 * 255.0);
+        for (got, want) in [(units.v_c, 1.0 / (768.0 * 255.0)), (units.v_d, want_d)] {
+            assert!((f64::from(got) / want - 1.0).abs() < 2f64.powi(-24));
         }
+        assert_eq!(units.det_floor, 426_148f32 * 426_148f32);
     }
 
     #[test]
@@ -264,14 +278,19 @@ mod tests {
     }
 
     #[test]
-    fn every_admissible_scale_gives_a_normalised_mantissa() {
+    fn every_admissible_scale_gives_normal_units() {
         for (num, den) in [(1, 1), (1, 255), (3, 7), (1, 699_050), (255, 256)] {
             let scale = IntensityScale::new(num, den).unwrap();
             // A λ whose Λ8 is about 1000 at this scale, or the smallest λ.
             let s = f64::from(num) / f64::from(den);
             let lambda = U32F32::from_num(1000.0 * s * s / 65_536.0).max(U32F32::DELTA);
             let c = Config::new(1, 1, Params { scale, lambda }).unwrap();
-            assert!(c.c.mant >= 1 << 31 && c.k.mant >= 1 << 31, "{num}/{den}");
+            let units = c.units();
+            assert!(
+                units.v_c.is_normal() && units.v_d.is_normal(),
+                "{num}/{den}"
+            );
+            assert!(units.det_floor >= 1.0, "{num}/{den}");
             assert!((6144..=1 << 32).contains(&c.kappa), "{num}/{den}");
             assert!((8..=14).contains(&c.dn_shift), "{num}/{den}");
         }

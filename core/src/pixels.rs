@@ -9,27 +9,26 @@
 //! 40-byte pixels cost the x86-64 `run` path a store and a load of every
 //! pixel between tail and sink, and the engine 40 bytes a window column.
 
-use fixed::types::{I16F16, U32F32};
-
 /// Everything the representation knows about one pixel.
 ///
 /// The fields are computed only for sinks that ask for them
 /// ([`Sink::reads_fields`](crate::Sink::reads_fields)); for the others
 /// they are zero.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+///
+/// Every value is in pixels, an IEEE binary32 (`f32`) with the same bits on
+/// every target (`tail.rs`): finite, and the magnitudes non-negative.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlowPixel {
-    /// Curl-free field `v_c` (x, y), pixels, Q16.16, to nearest.
-    pub v_c: [I16F16; 2],
-    /// Divergence-free field `v_d` (x, y), pixels, Q16.16, to nearest
-    /// (saturating at ±32 768 px).
-    pub v_d: [I16F16; 2],
-    /// `|v_c|`, Q32.32, from the exact `V` (relative error below 2⁻²¹,
-    /// so per-frame min–max keeps its precision on small motions).
-    pub m_c: U32F32,
-    /// `|v_d|`, Q32.32, from the solve's numerators before any rounding
-    /// (relative error below 2⁻²⁰; saturating at 65 536 px).
-    pub m_d: U32F32,
+    /// Curl-free field `v_c` (x, y): the exact integer `V` times `s/768`,
+    /// rounded once.
+    pub v_c: [f32; 2],
+    /// Divergence-free field `v_d` (x, y), from the `f32` solve.
+    pub v_d: [f32; 2],
+    /// `|v_c|`, from the exact `V` (relative error below 2⁻²²).
+    pub m_c: f32,
+    /// `|v_d|`, from the solve's numerators (never from a rounded field).
+    pub m_d: f32,
     /// The pixel of `fⁿ` (the representation's B channel).
     pub luma: u8,
 }
@@ -39,9 +38,9 @@ pub struct FlowPixel {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Fields<'a> {
     /// `v_c` x and y (see [`FlowPixel::v_c`]).
-    pub v_c: [&'a [I16F16]; 2],
+    pub v_c: [&'a [f32]; 2],
     /// `v_d` x and y (see [`FlowPixel::v_d`]).
-    pub v_d: [&'a [I16F16]; 2],
+    pub v_d: [&'a [f32]; 2],
 }
 
 /// One output row segment: pixels `[x, x + len)` of a frame row, each
@@ -50,9 +49,9 @@ pub struct Fields<'a> {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Pixels<'a> {
     /// `|v_d|` (see [`FlowPixel::m_d`]).
-    pub m_d: &'a [U32F32],
+    pub m_d: &'a [f32],
     /// `|v_c|` (see [`FlowPixel::m_c`]).
-    pub m_c: &'a [U32F32],
+    pub m_c: &'a [f32],
     /// `fⁿ`.
     pub luma: &'a [u8],
     /// The fields, for sinks that read them
@@ -75,12 +74,12 @@ impl<'a> Pixels<'a> {
     /// The segment's pixels one at a time (fields zero where there are
     /// none): for sinks that want whole pixels rather than rows.
     pub fn iter(&self) -> impl Iterator<Item = FlowPixel> + 'a {
-        let zero: &[I16F16] = &[];
+        let zero: &[f32] = &[];
         let Fields { v_c, v_d } = self.fields.unwrap_or(Fields {
             v_c: [zero; 2],
             v_d: [zero; 2],
         });
-        let field = move |row: &'a [I16F16], i: usize| row.get(i).copied().unwrap_or_default();
+        let field = move |row: &'a [f32], i: usize| row.get(i).copied().unwrap_or_default();
         let magnitudes = self.m_d.iter().zip(self.m_c).zip(self.luma);
         magnitudes
             .enumerate()

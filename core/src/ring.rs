@@ -19,17 +19,26 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
         }
     }
 
-    /// Where row `t` starts (the slot it shares with rows `t ± DEPTH`).
+    /// Where row `t` starts (the slot it shares with rows `t ± DEPTH`),
+    /// clamped to the memory (which the engines size so it never is).
     #[inline(always)]
     fn slot(&self, t: usize) -> core::ops::Range<usize> {
-        let start = (t % DEPTH) * self.cols;
-        start..start + self.cols
+        let len = self.rows.len();
+        let start = ((t % DEPTH) * self.cols).min(len);
+        start..(start + self.cols).min(len)
     }
 
-    /// Row `t` (empty if the memory was short, which the engines rule out).
+    /// Row `t` (shorter if the memory was short, which the engines rule
+    /// out). Indexed within clamped bounds, not `get(…).unwrap_or(&[])`:
+    /// a row that may be the empty slice's dangling pointer instead of one
+    /// into the memory has no known bounds, and the compiler then keeps
+    /// the loops over it out of vector lanes (the x86-64 pass's vertical
+    /// sums ran scalar).
     #[inline(always)]
     pub(crate) fn row(&self, t: usize) -> &[T] {
-        self.rows.get(self.slot(t)).unwrap_or(&[])
+        let slot = self.slot(t);
+        let (_, rest) = self.rows.split_at(slot.start);
+        rest.split_at(slot.len().min(rest.len())).0
     }
 
     /// Rows `first .. first + K`, oldest first.
@@ -42,7 +51,9 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
     #[inline(always)]
     pub(crate) fn row_mut(&mut self, t: usize) -> &mut [T] {
         let slot = self.slot(t);
-        self.rows.get_mut(slot).unwrap_or(&mut [])
+        let (_, rest) = self.rows.split_at_mut(slot.start);
+        let len = slot.len().min(rest.len());
+        rest.split_at_mut(len).0
     }
 }
 

@@ -1,7 +1,5 @@
 //! Ready-made sinks: field planes, the RGB representation, and extremes.
 
-use fixed::types::{I16F16, U32F32};
-
 use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Pixels, Sink};
 
 /// Check that an output plane holds a whole frame.
@@ -32,17 +30,17 @@ fn segment<T>(
 #[derive(Debug, Default)]
 pub struct FieldPlanes<'a> {
     /// `v_c` x, row-major, `width · height`.
-    pub v_c_x: Option<&'a mut [I16F16]>,
+    pub v_c_x: Option<&'a mut [f32]>,
     /// `v_c` y.
-    pub v_c_y: Option<&'a mut [I16F16]>,
+    pub v_c_y: Option<&'a mut [f32]>,
     /// `v_d` x.
-    pub v_d_x: Option<&'a mut [I16F16]>,
+    pub v_d_x: Option<&'a mut [f32]>,
     /// `v_d` y.
-    pub v_d_y: Option<&'a mut [I16F16]>,
+    pub v_d_y: Option<&'a mut [f32]>,
     /// `|v_c|`.
-    pub m_c: Option<&'a mut [U32F32]>,
+    pub m_c: Option<&'a mut [f32]>,
     /// `|v_d|`.
-    pub m_d: Option<&'a mut [U32F32]>,
+    pub m_d: Option<&'a mut [f32]>,
 }
 
 /// A sink that writes the fields into caller-provided planes.
@@ -112,7 +110,7 @@ pub fn rgb(px: &FlowPixel, scale_d: &ByteScale, scale_c: &ByteScale) -> [u8; 3] 
 
 /// [`rgb`] from the three values it reads.
 #[inline(always)]
-fn rgb_of(m_d: U32F32, m_c: U32F32, luma: u8, [scale_d, scale_c]: [&ByteScale; 2]) -> [u8; 3] {
+fn rgb_of(m_d: f32, m_c: f32, luma: u8, [scale_d, scale_c]: [&ByteScale; 2]) -> [u8; 3] {
     [scale_d.byte(m_d), scale_c.byte(m_c), luma]
 }
 
@@ -139,22 +137,22 @@ pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out
 }
 
 /// Pixels of one [`rgb_row`] batch on targets whose rows take vector lanes:
-/// enough for the compiler to take [`rgb_batch`]'s loops in them (at 16
-/// they stayed scalar: the host's AVX2 pass with `Fixed` gains counted
-/// 153.8 instructions per pixel, 129.6 at 32, `scripts/profile-stages`).
+/// the bytes of each channel in lanes, then one interleaving loop.
 pub const RGB_BATCH: usize = 32;
 
-/// [`rgb`] of `N` pixels given as rows: both bytes in lanes
-/// ([`ByteScale::bytes`]; the per-pixel [`ByteScale::byte`] keeps a branch,
-/// and its loop stays scalar), then interleaved with `fⁿ`.
+/// [`rgb`] of `N` pixels given as rows: each channel's bytes in one loop
+/// (vector lanes where the target has them), then interleaved with `fⁿ`.
 #[inline(always)]
 pub fn rgb_batch<const N: usize>(
-    [m_d, m_c]: [&[U32F32; N]; 2],
+    [m_d, m_c]: [&[f32; N]; 2],
     luma: &[u8; N],
     [scale_d, scale_c]: [&ByteScale; 2],
     out: &mut [[u8; 3]; N],
 ) {
-    let (r, g) = (scale_d.bytes(m_d), scale_c.bytes(m_c));
+    let (mut r, mut g) = ([0u8; N], [0u8; N]);
+    for i in 0..N {
+        (r[i], g[i]) = (scale_d.byte(m_d[i]), scale_c.byte(m_c[i]));
+    }
     for (i, out) in out.iter_mut().enumerate() {
         *out = [r[i], g[i], luma[i]];
     }
@@ -202,7 +200,7 @@ impl Sink for RgbSink<'_> {
 }
 
 /// A sink that records the extremes of both magnitudes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExtremesSink {
     /// Extremes of `|v_d|`.

@@ -16,17 +16,20 @@
 //! | `Q = 1536 · div / s` (central differences) | i32 | `63 312 · 255 = 16 144 560 < 2²⁴` |
 //! | `X, Y = Sobel ⋆ p0` (`fx = X · s/8`) | i32 | 1020 |
 //! | `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q` (`D = Dn · s²/6144`) | i64 | `255·κ + 1020 · 29 853 360 < 2^(27+σ)` |
-//! | `Dn′ = round(Dn / 2^σ) = h·2¹⁴ + l`, `l ∈ [−2¹³, 2¹³)` | i32 | `|Dn′| ≤ 2²⁷`, `|h| ≤ 2¹³` |
+//! | `Dn′ = round(Dn / 2^σ)` | i32 | `|Dn′| ≤ 2²⁷` |
 //! | `X², XY, Y²`, then horizontal `G` | i32 | `16 · 1020² < 2²⁴` |
-//! | `X·h, X·l, Y·h, Y·l`, then horizontal `G` | i32 | `16 · 1020 · 2¹³ < 2²⁷` |
 //! | `a, b, c` (vertical `G`) | i32 | `256 · 1020² < 2²⁸` |
-//! | `p = (p_h, p_l)`, `q` (vertical `G`) | 2 × i32 | `256 · 1020 · 2¹³ = 2 139 095 040 < 2³¹` |
+//! | `X · Dn′ · 2⁻²⁰`, `Y · …`, then both `G`s: `p, q` | f32 | `256 · 1020 · 2⁷ < 2²⁵` |
 //!
 //! `V`'s and `Q`'s bounds are the L1 norms of their kernels on `d` times 255.
-//! `Dn′` is the one rounding before the solve: it keeps every later sum in
-//! 32-bit lanes (8 per AVX2 register, one per M4 register), and its error,
-//! at most `2^(σ−1)` against `|κ·d| ≥ 2^(σ+12)` for any temporal change,
-//! stays far inside the SPEC's tolerances (`tests/tests/accuracy.rs`).
+//! Everything up to `Dn′` and the sums `a, b, c` are exact integers. `Dn′`
+//! is the first rounding (at most `2^(σ−1)` against `|κ·d| ≥ 2^(σ+12)` for
+//! any temporal change); `p` and `q` are summed in `f32` (each product and
+//! sum correctly rounded, in one fixed order on every target: the binomial
+//! below), which, like the tail's `f32` solve, stays far inside the SPEC's
+//! tolerances (`tests/tests/accuracy.rs`). The scaling by 2⁻²⁰ (exact)
+//! keeps the tail's squares of `N` in range; every product is then 0 or
+//! a multiple of 2⁻²⁰, so no value is subnormal.
 //!
 //! The bounds are worst cases over all inputs (`Dn`'s first term at the
 //! largest admissible `κ`); the tests run with overflow checks on.
@@ -38,12 +41,37 @@
 //! memory cannot serve (never, once an engine has validated its memory)
 //! makes the kernel do nothing.
 
-use core::ops::{Add, Shl};
+use core::ops::Add;
 
-/// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
-#[inline(always)]
-fn binomial<T: Copy + Add<Output = T> + Shl<u32, Output = T>>(a: T, b: T, c: T, d: T, e: T) -> T {
-    (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
+/// What the binomial sums add: exact integers, or `f32` (the sums of `p`
+/// and `q`).
+pub trait Sample: Copy + Default + Add<Output = Self> {
+    /// Whether sums are exact, so that any order of adding gives the same
+    /// value (the running form below; `f32` sums keep one order everywhere).
+    const EXACT: bool;
+
+    /// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
+    fn binomial(a: Self, b: Self, c: Self, d: Self, e: Self) -> Self;
+}
+
+impl Sample for i32 {
+    const EXACT: bool = true;
+
+    #[inline(always)]
+    fn binomial(a: i32, b: i32, c: i32, d: i32, e: i32) -> i32 {
+        (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
+    }
+}
+
+impl Sample for f32 {
+    const EXACT: bool = false;
+
+    /// In this order on every target (`×4` is exact; `×6` and each sum
+    /// round once).
+    #[inline(always)]
+    fn binomial(a: f32, b: f32, c: f32, d: f32, e: f32) -> f32 {
+        ((a + e) + (b + d) * 4.0) + c * 6.0
+    }
 }
 
 /// Columns `[r, n − r)` of a window of `n` columns. Rows are at least `n`
@@ -56,10 +84,7 @@ fn span(n: usize, r: usize) -> core::ops::Range<usize> {
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn vertical_binomial<T>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize)
-where
-    T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
-{
+pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize) {
     let cols = span(n, r);
     let len = cols.len();
     let [a, b, c, d, e] = rows.map(|row| cut(row, cols.start, len));
@@ -68,30 +93,54 @@ where
     else {
         return;
     };
-    // Two columns per step, both loaded before either is stored: fewer
-    // instructions per pixel on RV32 (1 230 → 1 195), aarch64 (294 → 285),
-    // the M4 at 320×240 (851 → 843; 866 → 871 at 160×120) and x86-64
-    // (`run` −1 %), `scripts/embedded-check` and callgrind.
+    if crate::VECTOR_ROWS {
+        return binomial_of(a, b, c, d, e, out);
+    }
+    // On the scalar boards two columns per step, both loaded before either
+    // is stored: fewer instructions per pixel on RV32 (1 230 → 1 195) and
+    // the M4 at 320×240 (851 → 843), `scripts/embedded-check`.
     let [pa, pb, pc, pd, pe] = [a, b, c, d, e].map(|row| row.chunks_exact(2));
     let rows = pa.zip(pb).zip(pc).zip(pd).zip(pe);
     for (o, ((((a, b), c), d), e)) in out.chunks_exact_mut(2).zip(rows) {
-        let x0 = binomial(a[0], b[0], c[0], d[0], e[0]);
-        let x1 = binomial(a[1], b[1], c[1], d[1], e[1]);
+        let x0 = T::binomial(a[0], b[0], c[0], d[0], e[0]);
+        let x1 = T::binomial(a[1], b[1], c[1], d[1], e[1]);
         o[0] = x0;
         o[1] = x1;
     }
     if len % 2 == 1 {
         let i = len - 1;
-        out[i] = binomial(a[i], b[i], c[i], d[i], e[i]);
+        out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
+    }
+}
+
+/// `out[i] = G` of the five rows' `i`-th values. Every row a parameter of
+/// its own (the hot loops' pattern, here and in `tail`): Rust tells the
+/// compiler that references passed so do not alias, and the compiler keeps
+/// that knowledge when it inlines the function (as scopes on each load and
+/// store). Rows reached through arrays or structures carry no such
+/// promise, and where the engine's rows come from one memory the compiler
+/// must then prove them apart itself, which it did for some loops and not
+/// for others (the x86-64 pass ran its vertical sums scalar).
+#[inline(always)]
+fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
+    let len = out.len();
+    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
+        a.get(..len),
+        b.get(..len),
+        c.get(..len),
+        d.get(..len),
+        e.get(..len),
+    ) else {
+        return;
+    };
+    for i in 0..len {
+        out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
     }
 }
 
 /// The horizontal binomial of a row valid on `[r − 2, n − r + 2)`, on `[r, n − r)`.
 #[inline(always)]
-fn horizontal_binomial<T>(row: &[T], out: &mut [T], n: usize, r: usize)
-where
-    T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
-{
+fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) {
     let cols = span(n, r.max(2));
     let len = cols.len();
     let Some(out) = cut_mut(out, cols.start, len) else {
@@ -100,8 +149,9 @@ where
     let first = cols.start.wrapping_sub(2);
     // Running sums on the scalar boards (one load and four adds a column,
     // where the loads are the cost); taps where they vectorise (a running
-    // sum would serialise them).
-    if !crate::VECTOR_ROWS {
+    // sum would serialise them), and for `f32`, whose sums must keep one
+    // order on every target.
+    if !crate::VECTOR_ROWS && T::EXACT {
         if let Some(taps) = cut(row, first, len + 4) {
             running_binomial(taps, out);
         }
@@ -112,10 +162,7 @@ where
 
 /// `out[i] = G ⋆ row[first + i .. first + i + 5]`, five taps a column.
 #[inline(always)]
-fn tapped_binomial<T>(row: &[T], first: usize, out: &mut [T])
-where
-    T: Copy + Default + Add<Output = T> + Shl<u32, Output = T>,
-{
+fn tapped_binomial<T: Sample>(row: &[T], first: usize, out: &mut [T]) {
     let len = out.len();
     // Each tap cut from the row itself: cut from one slice of `len + 4`
     // instead, aarch64 counts 347 instructions per pixel against 285
@@ -125,9 +172,7 @@ where
     let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (at(0), at(1), at(2), at(3), at(4)) else {
         return;
     };
-    for i in 0..len {
-        out[i] = binomial(a[i], b[i], c[i], d[i], e[i]);
-    }
+    binomial_of(a, b, c, d, e, out);
 }
 
 /// [`tapped_binomial`] as four running pair sums, `[1 4 6 4 1] = [1 1]⁴`:
@@ -171,12 +216,17 @@ pub fn boundary_minus_domain(
     d: [&[i16]; 5],
     vert: &mut [&mut [i16]; 4],
     e: Pair<'_, i32>,
+    e_smoothed: Pair<'_, i32>,
     n: usize,
 ) {
     let [v1, v2, v3, v4] = vert;
     vertical_parts(d, v1, v2, v3, v4, span(n, 0));
     let (ex, ey) = e;
     horizontal_parts([v1, v2, v3, v4], ex, ey, span(n, 2));
+    // The horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
+    // vertical one): the ring keeps `E` smoothed along its row.
+    horizontal_binomial(ex, e_smoothed.0, n, 4);
+    horizontal_binomial(ey, e_smoothed.1, n, 4);
 }
 
 /// The four vertical parts of `E` on columns `cols`.
@@ -199,6 +249,33 @@ fn vertical_parts(
         cut_mut(v2, start, len),
         cut_mut(v3, start, len),
         cut_mut(v4, start, len),
+    ) else {
+        return;
+    };
+    vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
+}
+
+/// [`vertical_parts`]' loop, every output row a parameter of its own (see
+/// [`binomial_of`]); the inputs are only read.
+#[inline(always)]
+fn vertical_parts_of(
+    [d0, d1, d2, d3, d4]: [&[i16]; 5],
+    v1: &mut [i16],
+    v2: &mut [i16],
+    v3: &mut [i16],
+    v4: &mut [i16],
+) {
+    let len = d0.len();
+    let (Some(d1), Some(d2), Some(d3), Some(d4)) =
+        (d1.get(..len), d2.get(..len), d3.get(..len), d4.get(..len))
+    else {
+        return;
+    };
+    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
+        v1.get_mut(..len),
+        v2.get_mut(..len),
+        v3.get_mut(..len),
+        v4.get_mut(..len),
     ) else {
         return;
     };
@@ -228,27 +305,70 @@ fn horizontal_parts(
     let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
         return;
     };
-    let tap = |row: &[&[i16]; 5], k: usize, i: usize| i32::from(row[k][i]);
     // One loop per component: one for both kept 20 row pointers live,
     // which the M4 spilled (61 instructions per pixel against 45,
-    // `scripts/embedded-check`). Counted, not enumerated:
-    // `iter_mut().enumerate()` left a bounds check (a panic path) on the taps.
-    #[allow(clippy::needless_range_loop)]
-    for i in 0..len {
-        ex[i] = boundary_minus_domain_x(|k| tap(&v1, k, i), |k| tap(&v2, k, i));
+    // `scripts/embedded-check`).
+    let ([a, b, c, d, e], [f, g, h, i, j]) = (v1, v2);
+    component_of(boundary_minus_domain_x, a, b, c, d, e, f, g, h, i, j, ex);
+    let ([a, b, c, d, e], [f, g, h, i, j]) = (v3, v4);
+    component_of(boundary_minus_domain_y, a, b, c, d, e, f, g, h, i, j, ey);
+}
+
+/// One component of `E` from the five taps of two vertical parts, every
+/// tap and the output a parameter of its own (see [`binomial_of`]).
+/// Counted, not enumerated: `iter_mut().enumerate()` left a bounds check
+/// (a panic path) on the taps.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn component_of(
+    formula: impl Fn([i32; 5], [i32; 5]) -> i32,
+    a: &[i16],
+    b: &[i16],
+    c: &[i16],
+    d: &[i16],
+    e: &[i16],
+    f: &[i16],
+    g: &[i16],
+    h: &[i16],
+    i: &[i16],
+    j: &[i16],
+    out: &mut [i32],
+) {
+    let len = out.len();
+    fn cut(tap: &[i16], len: usize) -> Option<&[i16]> {
+        tap.get(..len)
     }
-    #[allow(clippy::needless_range_loop)]
-    for i in 0..len {
-        ey[i] = boundary_minus_domain_y(|k| tap(&v3, k, i), |k| tap(&v4, k, i));
+    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
+        cut(a, len),
+        cut(b, len),
+        cut(c, len),
+        cut(d, len),
+        cut(e, len),
+    ) else {
+        return;
+    };
+    let (Some(f), Some(g), Some(h), Some(i), Some(j)) = (
+        cut(f, len),
+        cut(g, len),
+        cut(h, len),
+        cut(i, len),
+        cut(j, len),
+    ) else {
+        return;
+    };
+    for k in 0..len {
+        let first = [a[k], b[k], c[k], d[k], e[k]].map(i32::from);
+        let second = [f[k], g[k], h[k], i[k], j[k]].map(i32::from);
+        out[k] = formula(first, second);
     }
 }
 
 /// `E` x of one column from the taps `k ∈ [0, 5)` (column offsets `k − 2`)
 /// of its vertical parts `[1 4 1]ᵀ ⋆ d` and `[1 3 4 3 1]ᵀ ⋆ d`.
 #[inline(always)]
-fn boundary_minus_domain_x(v1: impl Fn(usize) -> i32, v2: impl Fn(usize) -> i32) -> i32 {
-    let kb_x = v1(3) - v1(1);
-    let bs_x = (v2(3) + v2(4)) - (v2(1) + v2(0));
+fn boundary_minus_domain_x(v1: [i32; 5], v2: [i32; 5]) -> i32 {
+    let kb_x = v1[3] - v1[1];
+    let bs_x = (v2[3] + v2[4]) - (v2[1] + v2[0]);
     let e = kb_x - 3 * bs_x;
     debug_assert!(e.abs() <= E_MAX, "E x = {e}");
     e
@@ -257,24 +377,26 @@ fn boundary_minus_domain_x(v1: impl Fn(usize) -> i32, v2: impl Fn(usize) -> i32)
 /// `E` y of one column from the taps of its vertical parts `[−1 0 1]ᵀ ⋆ d`
 /// and `[−1 −1 0 1 1]ᵀ ⋆ d`.
 #[inline(always)]
-fn boundary_minus_domain_y(v3: impl Fn(usize) -> i32, v4: impl Fn(usize) -> i32) -> i32 {
-    let kb_y = v3(1) + 4 * v3(2) + v3(3);
-    let bs_y = (v4(0) + v4(4)) + 3 * (v4(1) + v4(3)) + 4 * v4(2);
+fn boundary_minus_domain_y(v3: [i32; 5], v4: [i32; 5]) -> i32 {
+    let kb_y = v3[1] + 4 * v3[2] + v3[3];
+    let bs_y = (v4[0] + v4[4]) + 3 * (v4[1] + v4[3]) + 4 * v4[2];
     let e = kb_y - 3 * bs_y;
     debug_assert!(e.abs() <= E_MAX, "E y = {e}");
     e
 }
 
-/// `V = G256 ⋆ E` on `[4, n−4)` from the five `E` rows centred on it.
+/// `V = G256 ⋆ E` on `[4, n−4)` from the five rows of `E` centred on it,
+/// each already smoothed along the row (`boundary_minus_domain`): the
+/// vertical half. Integer sums are exact, so the order of the halves does
+/// not matter; this one keeps both halves in loops the compiler takes in
+/// vector lanes (with the horizontal half last, from a scratch row into
+/// the ring of `V`, the x86-64 pass ran it scalar).
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn smooth(e: [[&[i32]; 5]; 2], vert: &mut [&mut [i32]; 2], v: Pair<'_, i32>, n: usize) {
-    let [ex, ey] = e;
-    let [tx, ty] = vert;
-    vertical_binomial(ex, tx, n, 2);
-    vertical_binomial(ey, ty, n, 2);
-    horizontal_binomial(tx, v.0, n, 4);
-    horizontal_binomial(ty, v.1, n, 4);
+pub fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
+    let [ex, ey] = e_smoothed;
+    vertical_binomial(ex, v.0, n, 4);
+    vertical_binomial(ey, v.1, n, 4);
     debug_assert!(
         v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
         "V beyond its bound"
@@ -303,9 +425,15 @@ pub struct ResidualInputs<'a> {
     pub shift: u32,
 }
 
-/// The seven structure channels, in the order of the product rows and the
-/// engine's sum rings: `X², XY, Y², X·h, X·l, Y·h, Y·l`.
-pub const CHANNELS: usize = 7;
+/// The integer structure channels, in the order of the product rows and
+/// the engine's sum rings: `X², XY, Y²`.
+pub const INT_CHANNELS: usize = 3;
+
+/// The `f32` structure channels: `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰`.
+pub const FLOAT_CHANNELS: usize = 2;
+
+/// 2⁻²⁰, the scaling of `Dn′` in the `f32` products (module doc).
+const DN_SCALE: f32 = 1.0 / 1_048_576.0;
 
 /// `Dn′ = round(Dn / 2^σ)` (half up) of
 /// `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q`, exactly, in 32-bit lanes: with
@@ -362,10 +490,8 @@ fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
     ])
 }
 
-/// The seven products on columns `cols`, each output row a parameter of its
-/// own so it can be [`cut`] like the inputs. (What makes the loop vectorise
-/// is the cut and the counted loop: once inlined, `&mut` parameters no
-/// longer tell the compiler the rows are apart.)
+/// The five products on columns `cols`: every row cut to exactly the
+/// columns (shifted rows one either side), then [`products_of`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn products_row(
@@ -373,10 +499,8 @@ fn products_row(
     xx: &mut [i32],
     xy: &mut [i32],
     yy: &mut [i32],
-    xh: &mut [i32],
-    xl: &mut [i32],
-    yh: &mut [i32],
-    yl: &mut [i32],
+    xd: &mut [f32],
+    yd: &mut [f32],
     cols: core::ops::Range<usize>,
 ) {
     let ResidualInputs {
@@ -422,14 +546,107 @@ fn products_row(
         return;
     };
     let start = cols.start;
-    let (Some(xx), Some(xy), Some(yy), Some(xh), Some(xl), Some(yh), Some(yl)) = (
+    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
         cut_mut(xx, start, len),
         cut_mut(xy, start, len),
         cut_mut(yy, start, len),
-        cut_mut(xh, start, len),
-        cut_mut(xl, start, len),
-        cut_mut(yh, start, len),
-        cut_mut(yl, start, len),
+        cut_mut(xd, start, len),
+        cut_mut(yd, start, len),
+    ) else {
+        return;
+    };
+    products_of(
+        (kappa, shift),
+        vx_l,
+        vx_c,
+        vx_r,
+        vy_u,
+        vy_c,
+        vy_d,
+        pu0,
+        pu1,
+        pu2,
+        pm0,
+        pm1,
+        pm2,
+        pd0,
+        pd1,
+        pd2,
+        d,
+        xx,
+        xy,
+        yy,
+        xd,
+        yd,
+    );
+}
+
+/// [`products_row`]'s loop over rows cut to one length, every row a
+/// parameter of its own (see [`binomial_of`]): `V` x left of, at and right
+/// of each column, `V` y above, at and below it, `p0`'s 3×3 neighbourhood
+/// (rows up, mid, down; columns left, at, right), `d`, and the products.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn products_of(
+    (kappa, shift): ([i32; 2], u32),
+    vx_l: &[i32],
+    vx_c: &[i32],
+    vx_r: &[i32],
+    vy_u: &[i32],
+    vy_c: &[i32],
+    vy_d: &[i32],
+    pu0: &[u8],
+    pu1: &[u8],
+    pu2: &[u8],
+    pm0: &[u8],
+    pm1: &[u8],
+    pm2: &[u8],
+    pd0: &[u8],
+    pd1: &[u8],
+    pd2: &[u8],
+    d: &[i16],
+    xx: &mut [i32],
+    xy: &mut [i32],
+    yy: &mut [i32],
+    xd: &mut [f32],
+    yd: &mut [f32],
+) {
+    let len = xx.len();
+    fn first<T>(row: &[T], len: usize) -> Option<&[T]> {
+        row.get(..len)
+    }
+    let words = |row| first::<i32>(row, len);
+    let bytes = |row| first::<u8>(row, len);
+    let (Some(vx_l), Some(vx_c), Some(vx_r), Some(vy_u), Some(vy_c), Some(vy_d)) = (
+        words(vx_l),
+        words(vx_c),
+        words(vx_r),
+        words(vy_u),
+        words(vy_c),
+        words(vy_d),
+    ) else {
+        return;
+    };
+    let (Some(pu0), Some(pu1), Some(pu2), Some(pm0), Some(pm1), Some(pm2)) = (
+        bytes(pu0),
+        bytes(pu1),
+        bytes(pu2),
+        bytes(pm0),
+        bytes(pm1),
+        bytes(pm2),
+    ) else {
+        return;
+    };
+    let (Some(pd0), Some(pd1), Some(pd2), Some(d)) =
+        (bytes(pd0), bytes(pd1), bytes(pd2), d.get(..len))
+    else {
+        return;
+    };
+    let (Some(xy), Some(yy), Some(xd), Some(yd)) = (
+        xy.get_mut(..len),
+        yy.get_mut(..len),
+        xd.get_mut(..len),
+        yd.get_mut(..len),
     ) else {
         return;
     };
@@ -440,40 +657,52 @@ fn products_row(
         let pm = [pm0[i], pm1[i], pm2[i]].map(i32::from);
         let pd = [pd0[i], pd1[i], pd2[i]].map(i32::from);
         let dd = d[i];
-        let (xx, xy, yy, xh, xl, yh, yl) = (
-            &mut xx[i], &mut xy[i], &mut yy[i], &mut xh[i], &mut xl[i], &mut yh[i], &mut yl[i],
-        );
         let q = (vx_r - vx_l) + (vy_d - vy_u);
         let x = (pu[2] - pu[0]) + 2 * (pm[2] - pm[0]) + (pd[2] - pd[0]);
         let y = (pd[0] + 2 * pd[1] + pd[2]) - (pu[0] + 2 * pu[1] + pu[2]);
         debug_assert!(x.abs() <= 1020 && y.abs() <= 1020 && q.abs() <= 16_144_560);
         let dn = rounded_residual(kappa, shift, i32::from(dd), [x, y], [vx_c, vy_c], pm[1], q);
-        // Dn′ = h·2¹⁴ + l, l ∈ [−2¹³, 2¹³), |h| ≤ 2¹³.
-        let l = (dn << 18) >> 18;
-        let h = (dn - l) >> 14;
-        *xx = x * x;
-        *xy = x * y;
-        *yy = y * y;
-        *xh = x * h;
-        *xl = x * l;
-        *yh = y * h;
-        *yl = y * l;
+        // `Dn′` rounds to 24 bits (from 28 at most); the scaling is exact.
+        let dn = dn as f32 * DN_SCALE;
+        xx[i] = x * x;
+        xy[i] = x * y;
+        yy[i] = y * y;
+        xd[i] = x as f32 * dn;
+        yd[i] = y as f32 * dn;
     }
 }
 
-/// The seven products on `[5, n−5)`, then their horizontal `G` on
+/// The products' rows and the sums' rows of one structure row: the exact
+/// integer channels and the `f32` ones.
+pub struct StructureRows<'a, 'm> {
+    /// `X², XY, Y²` on `[5, n−5)`.
+    pub int_products: &'a mut [&'m mut [i32]; INT_CHANNELS],
+    /// `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on `[5, n−5)`.
+    pub float_products: &'a mut [&'m mut [f32]; FLOAT_CHANNELS],
+    /// Their horizontal `G` on `[7, n−7)`, one row of each sum ring.
+    pub int_sums: [&'a mut [i32]; INT_CHANNELS],
+    /// Likewise for the `f32` channels.
+    pub float_sums: [&'a mut [f32]; FLOAT_CHANNELS],
+}
+
+/// The five products on `[5, n−5)`, then their horizontal `G` on
 /// `[7, n−7)` into one row of each sum ring.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
-pub fn structure_row(
-    input: &ResidualInputs<'_>,
-    products: &mut [&mut [i32]; CHANNELS],
-    sums: [&mut [i32]; CHANNELS],
-    n: usize,
-) {
-    let [xx, xy, yy, xh, xl, yh, yl] = products;
-    products_row(input, xx, xy, yy, xh, xl, yh, yl, span(n, 5));
-    for (row, sum) in products.iter().zip(sums) {
+pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n: usize) {
+    let StructureRows {
+        int_products,
+        float_products,
+        int_sums,
+        float_sums,
+    } = rows;
+    let [xx, xy, yy] = int_products;
+    let [xd, yd] = float_products;
+    products_row(input, xx, xy, yy, xd, yd, span(n, 5));
+    for (row, sum) in int_products.iter().zip(int_sums) {
+        horizontal_binomial(row, sum, n, 7);
+    }
+    for (row, sum) in float_products.iter().zip(float_sums) {
         horizontal_binomial(row, sum, n, 7);
     }
 }

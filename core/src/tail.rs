@@ -1,257 +1,219 @@
-//! An output row's per-pixel tail (SPEC §3 steps 9–10): the solve, its
-//! three exact floors (the determinant's reciprocal and two roots), the
-//! magnitudes and, for sinks that read them, the fields.
+//! An output row's per-pixel tail (SPEC §3 steps 9–11): the regularised
+//! 2×2 solve, the magnitudes and, for sinks that read them, the fields, in
+//! IEEE binary32.
 //!
-//! On x86-64 pixels go through in batches of [`LANES`], one array per
-//! quantity, so that the compiler takes a batch in vector lanes: inside
-//! the host's AVX2 pass every step of the magnitudes has a vector form
-//! (the floors from the FPU, `fpu.rs`: `vdivpd`, `vsqrtpd`; 32×32→64
-//! multiplies, variable shifts), and `reynoldsflow run` counts 17 % fewer
-//! instructions. Elsewhere the row is a plain per-pixel loop: arrays of
-//! one pixel cost the M4 about 70 instructions per pixel in stack traffic,
-//! and on aarch64 NEON's two `f64` lanes counted 313 per pixel against the
-//! loop's 294 (`scripts/embedded-check`). Both call the same per-pixel
-//! steps.
+//! Every step is one correctly rounded `f32` operation (`+ − × ÷ √` and
+//! conversions from `i32`), written in a fixed order: no fused
+//! multiply-add (Rust never contracts `a * b + c`; the M4's `VMLA` is the
+//! unfused form), no library function but the square root, which IEEE
+//! rounds correctly too (`fpu::sqrt`). So the hardware floats of x86-64,
+//! aarch64 and the M4F and the software floats of the M0 and RV32 give the
+//! same bits, and the row loop takes vector lanes where the target has them
+//! (eight pixels per AVX2 instruction, `vdivps`, `vsqrtps`).
+//!
+//! Formats and bounds (integer inputs exact, from `stages`):
+//!
+//! | quantity | form | bound |
+//! |---|---|---|
+//! | `a4 = 4A + Λ4`, `c4`; `b4 = 4B` | `i32`, then `f32` | `4 · 266 342 400 + 2³⁰ < 2³¹` |
+//! | `p, q` (summed in `f32`, `stages`) | `f32` | `256 · 1020 · 2²⁷ · 2⁻²⁰ = 2²⁵`; multiples of 2⁻²⁰ |
+//! | `det = a4·c4 − b4²`, at least `Λ4²` | `f32` | `[1, 2⁶²]` (`b² ≤ ac`, Cauchy–Schwarz) |
+//! | `N = (c4·p − b4·q, a4·q − b4·p)` | `f32` | `< 2⁵⁷`, `N² < 2¹¹⁵`; 0 or `≥ 2⁻⁴³` |
+//! | `V` | `i32`, exactly `f32` | `< 2²³` |
+//!
+//! So nothing overflows and no value is subnormal: results do not depend
+//! on a target's flush-to-zero setting. The determinant's clamp at `Λ4²`
+//! (true for the exact value) keeps a rounded `det` positive for any
+//! admissible `λ`. Rounding the inputs to 24 bits costs `v_d` about
+//! `2⁻²³ · cond` of its value (`cond ≤ 2³⁰ / Λ4`, largest on straight
+//! oblique edges at full contrast): at the SPEC's default parameters and
+//! at `s = 1/1024, λ = 1e-6` well inside the tolerances
+//! (`tests/tests/accuracy.rs`).
 
-use fixed::types::{I16F16, U32F32};
+use crate::fpu::sqrt;
+use crate::params::Units;
 
-use crate::Config;
-use crate::isqrt::isqrt;
-use crate::reciprocal::reciprocal;
-use crate::solve::{
-    Solved, Squares, StructureSums, curl_free_magnitude_q32, curl_free_q16,
-    divergence_free_magnitude_q32, divergence_free_q16, solve,
-};
-
-/// Pixels per batch: eight on x86-64 (two AVX2 vectors of four `f64`), one
-/// (no batches) elsewhere.
-pub const LANES: usize = if cfg!(target_arch = "x86_64") { 8 } else { 1 };
-
-/// The rows the tail reads, each from the first output column: the seven
-/// structure sums (`a, b, c, p_h, p_l, q_h, q_l`) and `V`.
+/// The rows the tail reads, each from the first output column: the
+/// structure sums `a, b, c` (exact integers) and `p, q` (`f32`), and `V`.
 pub struct TailRows<'a> {
-    /// `G256 ⋆` the seven products, in [`StructureSums`] order.
-    pub sums: [&'a [i32]; 7],
+    /// `G256 ⋆ X²`, `G256 ⋆ XY`, `G256 ⋆ Y²`.
+    pub abc: [&'a [i32]; 3],
+    /// `G256 ⋆ (X · Dn′)`, `G256 ⋆ (Y · Dn′)`, scaled by 2⁻²⁰.
+    pub pq: [&'a [f32]; 2],
     /// `V` (x, y).
     pub v: [&'a [i32]; 2],
 }
 
 /// The rows the tail writes, as long as the output: the magnitudes
 /// `[|v_d|, |v_c|]` and, for sinks that read them, the fields
-/// `[v_c x, v_c y, v_d x, v_d y]`.
+/// `[v_c x, v_c y, v_d x, v_d y]`, all in pixels.
 pub struct TailOut<'a> {
     /// `|v_d|`, `|v_c|`.
-    pub m: [&'a mut [U32F32]; 2],
+    pub m: [&'a mut [f32]; 2],
     /// `v_c`, `v_d`, or `None` when no sink reads them.
-    pub fields: Option<[&'a mut [I16F16]; 4]>,
+    pub fields: Option<[&'a mut [f32]; 4]>,
+}
+
+/// What the tail needs of the configuration.
+#[derive(Clone, Copy)]
+pub struct TailConstants {
+    /// `Λ4`.
+    pub lambda4: i32,
+    /// The `f32` units.
+    pub units: Units,
+}
+
+/// One pixel's solve: the numerators `N` and `1/det` in the units of
+/// `v_d` (`v_d = N · inv`).
+#[derive(Clone, Copy)]
+struct Solved {
+    n: [f32; 2],
+    inv: f32,
+}
+
+/// The regularised solve of one pixel (module table for the bounds).
+#[inline(always)]
+fn solve(k: &TailConstants, [a, b, c]: [i32; 3], [p, q]: [f32; 2]) -> Solved {
+    let a4 = (4 * a + k.lambda4) as f32;
+    let c4 = (4 * c + k.lambda4) as f32;
+    let b4 = (4 * b) as f32;
+    let det = a4 * c4 - b4 * b4;
+    // A select, not `f32::max`: no NaN can occur, and the plain compare is
+    // one vector instruction (`maxps` takes NaNs its own way).
+    let det = if det > k.units.det_floor {
+        det
+    } else {
+        k.units.det_floor
+    };
+    Solved {
+        n: [c4 * p - b4 * q, a4 * q - b4 * p],
+        inv: k.units.v_d / det,
+    }
+}
+
+/// `|v_d|` of a solve.
+#[inline(always)]
+fn divergence_free_magnitude(s: &Solved) -> f32 {
+    let [x, y] = s.n;
+    sqrt(x * x + y * y) * s.inv
+}
+
+/// `|v_c|` from `V`.
+#[inline(always)]
+fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
+    sqrt(x * x + y * y) * k.units.v_c
 }
 
 /// The tail of every pixel of `out` (as many as the shortest row has).
-#[inline(always)]
-pub fn tail_row(config: &Config, rows: &TailRows<'_>, out: TailOut<'_>) {
-    if LANES == 1 {
-        per_pixel(config, rows, out);
-    } else {
-        batched(config, rows, out);
-    }
-}
-
-/// One pixel's way to its magnitudes: the solve, its reciprocal (kept for
-/// the fields), both roots.
-#[inline(always)]
-fn magnitudes(config: &Config, sums: [i32; 7], v: [i32; 2]) -> (Solved, u32, [u64; 2]) {
-    let [a, b, c, ph, pl, qh, ql] = sums;
-    let solved = solve(
-        config,
-        StructureSums {
-            a,
-            b,
-            c,
-            p: [ph, pl],
-            q: [qh, ql],
-        },
-    );
-    let (d, cf) = (Squares::divergence_free(solved.n), Squares::curl_free(v));
-    let rd = reciprocal(solved.det32);
-    let (root_d, root_c) = (isqrt(d.radicand), isqrt(cf.radicand));
-    let m_d = divergence_free_magnitude_q32(config, solved.exp, rd, root_d, d.mu);
-    let m_c = curl_free_magnitude_q32(config, root_c, cf.mu);
-    (solved, rd, [m_d, m_c])
-}
-
-/// One pixel's fields `[v_c x, v_c y, v_d x, v_d y]` in Q16.16 bits.
-#[inline(always)]
-fn fields_of(config: &Config, solved: &Solved, rd: u32, v: [i32; 2]) -> [i32; 4] {
-    let [v_c_x, v_c_y] = v.map(|v| curl_free_q16(config, v));
-    let [v_d_x, v_d_y] = divergence_free_q16(config, solved, rd);
-    [v_c_x, v_c_y, v_d_x, v_d_y]
-}
-
-/// The row one pixel at a time.
-#[inline(always)]
-fn per_pixel(config: &Config, rows: &TailRows<'_>, out: TailOut<'_>) {
-    let [a, b, c, ph, pl, qh, ql] = rows.sums.map(<[i32]>::iter);
-    let sums = a.zip(b).zip(c).zip(ph).zip(pl).zip(qh).zip(ql);
-    let inputs = sums.zip(rows.v[0].iter().zip(rows.v[1]));
-    let [m_d, m_c] = out.m;
-    let magnitudes_out = m_d.iter_mut().zip(m_c.iter_mut());
-    let pixel = |(((((((&a, &b), &c), &ph), &pl), &qh), &ql), (&vx, &vy))| {
-        let v = [vx, vy];
-        let (solved, rd, m) = magnitudes(config, [a, b, c, ph, pl, qh, ql], v);
-        (solved, rd, m, v)
-    };
-    match out.fields {
-        // Two loops, so that the magnitudes' loop writes nothing else.
-        None => {
-            for ((m_d, m_c), input) in magnitudes_out.zip(inputs) {
-                let (_, _, [d, c], _) = pixel(input);
-                (*m_d, *m_c) = (U32F32::from_bits(d), U32F32::from_bits(c));
-            }
-        }
-        Some([v_c_x, v_c_y, v_d_x, v_d_y]) => {
-            let fields_out = v_c_x.iter_mut().zip(v_c_y).zip(v_d_x).zip(v_d_y);
-            for (((m_d, m_c), (((v_c_x, v_c_y), v_d_x), v_d_y)), input) in
-                magnitudes_out.zip(fields_out).zip(inputs)
-            {
-                let (solved, rd, [d, c], v) = pixel(input);
-                (*m_d, *m_c) = (U32F32::from_bits(d), U32F32::from_bits(c));
-                let f = fields_of(config, &solved, rd, v).map(I16F16::from_bits);
-                (*v_c_x, *v_c_y, *v_d_x, *v_d_y) = (f[0], f[1], f[2], f[3]);
-            }
-        }
-    }
-}
-
-/// The row in batches of `LANES` (the last padded).
-#[inline(always)]
-#[cfg_attr(
-    not(target_arch = "x86_64"),
-    allow(clippy::modulo_one, reason = "compiled but unused where LANES is 1")
-)]
-fn batched(config: &Config, rows: &TailRows<'_>, out: TailOut<'_>) {
+#[cfg_attr(feature = "profile", inline(never))]
+#[cfg_attr(not(feature = "profile"), inline(always))]
+pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
+    let TailRows {
+        abc: [a, b, c],
+        pq: [p, q],
+        v: [vx, vy],
+    } = *rows;
     let TailOut {
         m: [m_d, m_c],
         fields,
     } = out;
-    let len = m_d.len().min(m_c.len());
-    let whole = len - len % LANES;
-    // Batches as arrays (`as_chunks`): no length test or index product per
-    // batch and row (`chunks_exact` and a `try_into` each cost `run` 7.4
-    // instructions per pixel in the AVX2 pass, callgrind).
-    let [a, b, c, ph, pl, qh, ql] = rows.sums.map(|row| row.as_chunks::<LANES>().0.iter());
-    let [vx, vy] = rows.v.map(|row| row.as_chunks::<LANES>().0.iter());
-    let sums = a.zip(b).zip(c).zip(ph).zip(pl).zip(qh).zip(ql);
-    let inputs = sums.zip(vx.zip(vy));
-    let (m_d, m_d_rest) = m_d.split_at_mut(whole);
-    let (m_c, m_c_rest) = m_c.split_at_mut(whole.min(m_c.len()));
-    let outputs = m_d.as_chunks_mut::<LANES>().0.iter_mut();
-    let outputs = outputs.zip(m_c.as_chunks_mut::<LANES>().0);
-    let mut fields = fields.map(|rows| rows.map(|row| row.split_at_mut(whole.min(row.len()))));
-    let mut field_batches = fields.as_mut().map(|rows| {
-        rows.each_mut()
-            .map(|(whole, _)| whole.as_chunks_mut::<LANES>().0.iter_mut())
-    });
-    // Zipped by value (not through `&mut`), so the zip indexes every row
-    // from one counter instead of stepping eleven iterators.
-    for ((m_d, m_c), (((((((a, b), c), ph), pl), qh), ql), (vx, vy))) in outputs.zip(inputs) {
-        // Written out, not `[…].map(…)`: inside the host's AVX2 pass the
-        // compiler kept such a `map` out of line, a call per batch that cost
-        // `run` 18 instructions per pixel (callgrind).
-        let batch = Batch {
-            sums: [*a, *b, *c, *ph, *pl, *qh, *ql],
-            v: [*vx, *vy],
-        };
-        let done = batch.tail(config, field_batches.is_some());
-        *m_d = done.m[0].map(U32F32::from_bits);
-        *m_c = done.m[1].map(U32F32::from_bits);
-        if let Some(batches) = &mut field_batches {
-            for (batch, values) in batches.iter_mut().zip(done.fields) {
-                if let Some(out) = batch.next() {
-                    *out = values.map(I16F16::from_bits);
-                }
-            }
-        }
-    }
-    // The row's last, partial batch.
-    if whole < len {
-        let columns = whole..len;
-        let batch = Batch {
-            sums: rows.sums.map(|row| padded(row, columns.clone())),
-            v: rows.v.map(|row| padded(row, columns.clone())),
-        };
-        let done = batch.tail(config, fields.is_some());
-        let rest = [m_d_rest, m_c_rest];
-        for (out, values) in rest.into_iter().zip(done.m) {
-            for (out, value) in out.iter_mut().zip(values) {
-                *out = U32F32::from_bits(value);
-            }
-        }
-        if let Some(rows) = fields {
-            for ((_, out), values) in rows.into_iter().zip(done.fields) {
-                for (out, value) in out.iter_mut().zip(values) {
-                    *out = I16F16::from_bits(value);
-                }
-            }
+    match fields {
+        // Two loops, so that the magnitudes' loop writes nothing else.
+        None => magnitudes_of(k, a, b, c, p, q, vx, vy, m_d, m_c),
+        Some([v_c_x, v_c_y, v_d_x, v_d_y]) => {
+            let fields = [v_c_x, v_c_y, v_d_x, v_d_y];
+            fields_of(k, a, b, c, p, q, vx, vy, m_d, m_c, fields);
         }
     }
 }
 
-/// The values of `row` in `columns` (fewer than `LANES`), then
-/// `T::default()`: for a row's last, partial batch. The default is inside
-/// every step's domain (zero sums solve to zero with `det = Λ4²`; a zero
-/// vector's radicand is 0), and no column past the output is read.
+/// The magnitudes of a row, every row a parameter of its own: so the
+/// compiler knows them apart once it inlines this (see `stages`), and
+/// takes the loop in vector lanes.
 #[inline(always)]
-fn padded<T: Copy + Default>(row: &[T], columns: core::ops::Range<usize>) -> [T; LANES] {
-    let mut lanes = [T::default(); LANES];
-    for (lane, &value) in lanes.iter_mut().zip(row.get(columns).unwrap_or(&[])) {
-        *lane = value;
+#[allow(clippy::too_many_arguments)]
+fn magnitudes_of(
+    k: &TailConstants,
+    a: &[i32],
+    b: &[i32],
+    c: &[i32],
+    p: &[f32],
+    q: &[f32],
+    vx: &[i32],
+    vy: &[i32],
+    m_d: &mut [f32],
+    m_c: &mut [f32],
+) {
+    let len = m_d.len().min(m_c.len()).min(a.len());
+    let (Some(a), Some(b), Some(c), Some(p), Some(q), Some(vx), Some(vy)) = (
+        a.get(..len),
+        b.get(..len),
+        c.get(..len),
+        p.get(..len),
+        q.get(..len),
+        vx.get(..len),
+        vy.get(..len),
+    ) else {
+        return;
+    };
+    let (Some(m_d), Some(m_c)) = (m_d.get_mut(..len), m_c.get_mut(..len)) else {
+        return;
+    };
+    for i in 0..len {
+        let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
+        m_d[i] = divergence_free_magnitude(&solved);
+        m_c[i] = curl_free_magnitude(k, [vx[i] as f32, vy[i] as f32]);
     }
-    lanes
 }
 
-/// One batch's inputs, one array per quantity.
-struct Batch {
-    sums: [[i32; LANES]; 7],
-    v: [[i32; LANES]; 2],
-}
-
-/// One batch's outputs: `[|v_d|, |v_c|]` in Q32.32 bits and, if asked for,
-/// `[v_c x, v_c y, v_d x, v_d y]` in Q16.16 bits (else zero).
-struct BatchOut {
-    m: [[u64; LANES]; 2],
-    fields: [[i32; LANES]; 4],
-}
-
-impl Batch {
-    /// The tail of the batch's pixels.
-    #[inline(always)]
-    fn tail(&self, config: &Config, fields: bool) -> BatchOut {
-        let [a, b, c, ph, pl, qh, ql] = &self.sums;
-        let [vx, vy] = &self.v;
-        // Every lane's magnitudes in one loop over arrays, one per quantity
-        // (the vectoriser's form: an array of pairs here costs the x86-64
-        // pass a third more instructions), the fields after it, only where
-        // they are read.
-        let (mut m_d, mut m_c) = ([0u64; LANES], [0u64; LANES]);
-        let mut solved = [Solved::default(); LANES];
-        let mut rd = [0u32; LANES];
-        for i in 0..LANES {
-            let sums = [a[i], b[i], c[i], ph[i], pl[i], qh[i], ql[i]];
-            let (s, r, [d, c]) = magnitudes(config, sums, [vx[i], vy[i]]);
-            (solved[i], rd[i], m_d[i], m_c[i]) = (s, r, d, c);
-        }
-        let mut f = [[0i32; LANES]; 4];
-        if fields {
-            for i in 0..LANES {
-                let [v_c_x, v_c_y, v_d_x, v_d_y] =
-                    fields_of(config, &solved[i], rd[i], [vx[i], vy[i]]);
-                (f[0][i], f[1][i], f[2][i], f[3][i]) = (v_c_x, v_c_y, v_d_x, v_d_y);
-            }
-        }
-        BatchOut {
-            m: [m_d, m_c],
-            fields: f,
-        }
+/// [`magnitudes_of`] and the fields `[v_c x, v_c y, v_d x, v_d y]`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn fields_of(
+    k: &TailConstants,
+    a: &[i32],
+    b: &[i32],
+    c: &[i32],
+    p: &[f32],
+    q: &[f32],
+    vx: &[i32],
+    vy: &[i32],
+    m_d: &mut [f32],
+    m_c: &mut [f32],
+    [v_c_x, v_c_y, v_d_x, v_d_y]: [&mut [f32]; 4],
+) {
+    let len = m_d.len().min(m_c.len()).min(a.len());
+    let (Some(a), Some(b), Some(c), Some(p), Some(q), Some(vx), Some(vy)) = (
+        a.get(..len),
+        b.get(..len),
+        c.get(..len),
+        p.get(..len),
+        q.get(..len),
+        vx.get(..len),
+        vy.get(..len),
+    ) else {
+        return;
+    };
+    let (Some(m_d), Some(m_c)) = (m_d.get_mut(..len), m_c.get_mut(..len)) else {
+        return;
+    };
+    let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
+        v_c_x.get_mut(..len),
+        v_c_y.get_mut(..len),
+        v_d_x.get_mut(..len),
+        v_d_y.get_mut(..len),
+    ) else {
+        return;
+    };
+    for i in 0..len {
+        let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
+        let v = [vx[i] as f32, vy[i] as f32];
+        m_d[i] = divergence_free_magnitude(&solved);
+        m_c[i] = curl_free_magnitude(k, v);
+        v_c_x[i] = v[0] * k.units.v_c;
+        v_c_y[i] = v[1] * k.units.v_c;
+        v_d_x[i] = solved.n[0] * solved.inv;
+        v_d_y[i] = solved.n[1] * solved.inv;
     }
 }
 
@@ -260,77 +222,211 @@ mod tests {
     use std::vec::Vec;
 
     use super::*;
-    use crate::Params;
-    use crate::solve::tests::pixel_sums;
+    use crate::{Config, IntensityScale, Params};
+    use fixed::types::U32F32;
 
-    /// Every output row of one tail, filled with a sentinel first.
-    struct Rows {
-        m: [Vec<U32F32>; 2],
-        fields: [Vec<I16F16>; 4],
-    }
-
-    impl Rows {
-        fn new(width: usize) -> Self {
-            Self {
-                m: core::array::from_fn(|_| std::vec![U32F32::MAX; width]),
-                fields: core::array::from_fn(|_| std::vec![I16F16::MAX; width]),
-            }
-        }
-
-        fn out(&mut self, fields: bool) -> TailOut<'_> {
-            let [a, b, c, d] = self.fields.each_mut().map(|row| &mut row[..]);
-            TailOut {
-                m: self.m.each_mut().map(|row| &mut row[..]),
-                fields: fields.then_some([a, b, c, d]),
-            }
+    fn constants(params: Params) -> TailConstants {
+        let config = Config::new(8, 8, params).unwrap();
+        TailConstants {
+            lambda4: config.lambda4,
+            units: config.units(),
         }
     }
 
-    /// The batches give the per-pixel loop's rows, fields included, for
-    /// every row length around the batch size (whole and partial batches)
-    /// and sums from small to the largest gradients and residuals; every
-    /// output column is written, and the fields only when asked for.
+    fn small_scale() -> Params {
+        let scale = IntensityScale::new(1, 1024).unwrap();
+        let lambda = U32F32::from_num(1e-6);
+        Params { scale, lambda }
+    }
+
+    /// The f64 oracle of the solve in the SPEC's own units, with λ as the
+    /// configuration rounded it (`Λ4`), so only the arithmetic is tested.
+    fn oracle(params: Params, k: &TailConstants, abc: [i32; 3], pq: [f64; 2]) -> [f64; 2] {
+        let s = f64::from(params.scale.num()) / f64::from(params.scale.den());
+        let dn_shift = 8;
+        let ua = s * s / 16384.0;
+        let up = 2f64.powi(dn_shift + 20) * s * s * s / (8.0 * 6144.0 * 256.0);
+        let lambda = f64::from(k.lambda4) / 4.0 * ua;
+        let [a, b, c] = abc.map(f64::from);
+        let (a, b, c) = (a * ua + lambda, b * ua, c * ua + lambda);
+        let (p, q) = (pq[0] * up, pq[1] * up);
+        let det = a * c - b * b;
+        [(c * p - b * q) / det, (a * q - b * p) / det]
+    }
+
+    /// Sums built from 25 pixels of gradients and residuals, as the engine
+    /// builds them (so `b² ≤ ac` holds and every value is in range).
+    fn pixel_sums(seed: &mut u64, gmax: i64, dmax: i64) -> ([i32; 3], [f64; 2]) {
+        let g = [1i64, 4, 6, 4, 1];
+        let mut next = |range: i64| {
+            *seed ^= *seed << 13;
+            *seed ^= *seed >> 7;
+            *seed ^= *seed << 17;
+            (*seed % (2 * range as u64 + 1)) as i64 - range
+        };
+        let (mut abc, mut pq) = ([0i64; 3], [0i64; 2]);
+        for j in 0..25 {
+            let w = g[j / 5] * g[j % 5];
+            let (x, y, dn) = (next(gmax), next(gmax), next(dmax));
+            abc[0] += w * x * x;
+            abc[1] += w * x * y;
+            abc[2] += w * y * y;
+            pq[0] += w * x * dn;
+            pq[1] += w * y * dn;
+        }
+        let scaled = |v: i64| v as f64 * 2f64.powi(-20);
+        (abc.map(|v| v as i32), pq.map(scaled))
+    }
+
+    /// The `f32` solve is the oracle's to a few units of 2⁻²⁴ of the
+    /// oracle's own size, times the condition of the system (which the
+    /// rounding of its inputs multiplies), on sums from flat to the largest
+    /// gradients and residuals, at both parameter sets of the tolerances.
     #[test]
-    fn batches_are_the_per_pixel_loop() {
-        let config = Config::new(64, 8, Params::DEFAULT).unwrap();
+    fn solve_is_the_oracle_to_the_rounding_of_its_inputs() {
+        for params in [Params::DEFAULT, small_scale()] {
+            let k = constants(params);
+            let mut seed = 0x2545_f491_4f6c_dd1du64;
+            let mut worst = 0.0f64;
+            for case in 0..20_000 {
+                let (gmax, dmax) = [
+                    (1020, 1i64 << 27),
+                    (30, 1 << 20),
+                    (3, 1 << 27),
+                    (1020, 1000),
+                    (0, 1 << 27),
+                    (1, 1),
+                ][case % 6];
+                let (abc, pq) = pixel_sums(&mut seed, gmax, dmax);
+                let solved = solve(&k, abc, pq.map(|v| v as f32));
+                let got = solved.n.map(|n| f64::from(n * solved.inv));
+                let want = oracle(params, &k, abc, pq);
+                // The condition: largest over least eigenvalue of the system.
+                let [a, b, c] = abc.map(|v| 4.0 * f64::from(v));
+                let l = f64::from(k.lambda4);
+                let (mean, half) = ((a + c) / 2.0, ((a - c).powi(2) / 4.0 + b * b).sqrt());
+                let cond = (mean + half + l) / (mean - half + l);
+                let norm = want[0].hypot(want[1]);
+                let err = (got[0] - want[0]).hypot(got[1] - want[1]);
+                let bound = 8.0 * 2f64.powi(-24) * cond * norm;
+                assert!(
+                    err <= bound + f64::MIN_POSITIVE,
+                    "{abc:?} {pq:?}: error {err:e} of |v| {norm:e}, cond {cond:e}"
+                );
+                worst = worst.max(err / (2f64.powi(-24) * cond * norm).max(f64::MIN_POSITIVE));
+                let m = f64::from(divergence_free_magnitude(&solved));
+                assert!((m - got[0].hypot(got[1])).abs() <= 4.0 * 2f64.powi(-24) * m);
+            }
+            std::println!("solve: worst error {worst:.2} · 2⁻²⁴ · cond · |v|");
+        }
+    }
+
+    /// Extreme sums stay finite and positive, with the clamp holding `det`
+    /// at `Λ4²` where rounding would take it lower, at the smallest `λ`.
+    #[test]
+    fn extreme_sums_stay_finite() {
+        // Λ4 = 1, the least the configuration admits.
+        let tiny = Params {
+            lambda: U32F32::from_bits(1 << 16),
+            scale: IntensityScale::new(1, 1).unwrap(),
+        };
+        for params in [Params::DEFAULT, small_scale(), tiny] {
+            let k = constants(params);
+            let amax = 266_342_400i32;
+            let pmax = 2f32.powi(25);
+            for a in [0, 1, 1000, amax] {
+                for c in [0, 7, amax] {
+                    let bmax = ((f64::from(a) * f64::from(c)).sqrt()) as i32;
+                    for b in [-bmax, 0, bmax / 2, bmax] {
+                        for pq in [[-pmax, pmax], [0.0, 0.0], [pmax, 1.0], [2e-20, -pmax]] {
+                            let solved = solve(&k, [a, b, c], pq);
+                            let m = divergence_free_magnitude(&solved);
+                            assert!(m.is_finite() && m >= 0.0, "{a} {b} {c} {pq:?}: {m}");
+                            assert!(solved.inv > 0.0 && solved.inv.is_finite());
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn solve_is_odd_in_the_right_hand_side() {
+        let k = constants(Params::DEFAULT);
+        let (abc, pq) = ([5000, -1200, 900], [7535.25f32, -60.5]);
+        let s = solve(&k, abc, pq);
+        let neg = solve(&k, abc, pq.map(|v| -v));
+        assert_eq!(neg.n, s.n.map(|n| -n));
+        assert!(s.n[0] != 0.0 && s.n[1] != 0.0);
+    }
+
+    #[test]
+    fn curl_free_magnitude_is_the_norm() {
+        let k = constants(Params::DEFAULT);
+        let unit = 1.0 / (768.0 * 255.0);
+        assert_eq!(curl_free_magnitude(&k, [0.0, 0.0]), 0.0);
+        let mut s = 12345u64;
+        for case in 0..100_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let x = (s as i32 >> (case % 23 + 9)).clamp(-6_854_400, 6_854_400);
+            let y = ((s >> 32) as i32 >> (case % 17 + 9)).clamp(-6_854_400, 6_854_400);
+            let want = f64::from(x).hypot(f64::from(y)) * unit;
+            let got = f64::from(curl_free_magnitude(&k, [x as f32, y as f32]));
+            assert!((got - want).abs() <= want * 2f64.powi(-22), "{x} {y}");
+        }
+    }
+
+    /// The row gives each pixel's values, fields only when asked for, for
+    /// every length around the vector widths.
+    #[test]
+    fn a_row_is_its_pixels() {
+        let k = constants(Params::DEFAULT);
         let mut seed = 0x0DDB_1A5E_5BAD_5EEDu64;
-        for width in 0..=3 * LANES + 1 {
-            for (gmax, dmax) in [(3, 40), (1020, 1 << 20), (1020, (1 << 27) - 1)] {
-                let sums: Vec<StructureSums> = (0..width)
-                    .map(|_| pixel_sums(&mut seed, gmax, dmax))
-                    .collect();
-                let plane = |f: fn(&StructureSums) -> i32| sums.iter().map(f).collect::<Vec<_>>();
-                let planes = [
-                    plane(|s| s.a),
-                    plane(|s| s.b),
-                    plane(|s| s.c),
-                    plane(|s| s.p[0]),
-                    plane(|s| s.p[1]),
-                    plane(|s| s.q[0]),
-                    plane(|s| s.q[1]),
-                ];
-                let v: [Vec<i32>; 2] = core::array::from_fn(|k| {
-                    (0..width as i32)
-                        .map(|i| (i * 7919 + k as i32 * 104_729) % 6_854_400 - 3_000_000)
-                        .collect()
-                });
-                let rows = TailRows {
-                    sums: planes.each_ref().map(|p| &p[..]),
-                    v: [&v[0][..], &v[1][..]],
+        for width in 0..=33 {
+            let sums: Vec<_> = (0..width)
+                .map(|_| pixel_sums(&mut seed, 1020, 1 << 20))
+                .collect();
+            let abc: [Vec<i32>; 3] =
+                core::array::from_fn(|j| sums.iter().map(|s| s.0[j]).collect());
+            let pq: [Vec<f32>; 2] =
+                core::array::from_fn(|j| sums.iter().map(|s| s.1[j] as f32).collect());
+            let v: [Vec<i32>; 2] = core::array::from_fn(|j| {
+                (0..width as i32)
+                    .map(|i| (i * 7919 + j as i32 * 104_729) % 6_854_400 - 3_000_000)
+                    .collect()
+            });
+            let rows = TailRows {
+                abc: abc.each_ref().map(|r| &r[..]),
+                pq: pq.each_ref().map(|r| &r[..]),
+                v: v.each_ref().map(|r| &r[..]),
+            };
+            for with_fields in [false, true] {
+                let mut m: [Vec<f32>; 2] = core::array::from_fn(|_| std::vec![-1.0; width]);
+                let mut f: [Vec<f32>; 4] = core::array::from_fn(|_| std::vec![-1.0; width]);
+                let [f0, f1, f2, f3] = f.each_mut().map(|r| &mut r[..]);
+                let out = TailOut {
+                    m: m.each_mut().map(|r| &mut r[..]),
+                    fields: with_fields.then_some([f0, f1, f2, f3]),
                 };
-                for fields in [false, true] {
-                    let (mut by_pixel, mut by_batch) = (Rows::new(width), Rows::new(width));
-                    per_pixel(&config, &rows, by_pixel.out(fields));
-                    batched(&config, &rows, by_batch.out(fields));
-                    let what = std::format!("width {width}, fields {fields}");
-                    assert_eq!(by_batch.m, by_pixel.m, "{what}");
-                    assert_eq!(by_batch.fields, by_pixel.fields, "{what}");
-                    assert!(
-                        by_pixel.m.iter().flatten().all(|&m| m < U32F32::MAX),
-                        "{what}"
-                    );
-                    let untouched = by_pixel.fields.iter().flatten().all(|&f| f == I16F16::MAX);
-                    assert_eq!(untouched, !fields || width == 0, "{what}");
+                tail_row(&k, &rows, out);
+                for i in 0..width {
+                    let s = solve(&k, sums[i].0, sums[i].1.map(|v| v as f32));
+                    let vc = [v[0][i] as f32, v[1][i] as f32];
+                    assert_eq!(m[0][i], divergence_free_magnitude(&s));
+                    assert_eq!(m[1][i], curl_free_magnitude(&k, vc));
+                    let want = if with_fields {
+                        [
+                            vc[0] * k.units.v_c,
+                            vc[1] * k.units.v_c,
+                            s.n[0] * s.inv,
+                            s.n[1] * s.inv,
+                        ]
+                    } else {
+                        [-1.0; 4]
+                    };
+                    assert_eq!([f[0][i], f[1][i], f[2][i], f[3][i]], want);
                 }
             }
         }

@@ -42,11 +42,20 @@
 //!
 //! # Numbers and bounds
 //!
-//! - Magnitudes are the engine's `U32F32` (`m < 2^31.5` px, since each field
-//!   component saturates at `2^31` px in Q16.16). Peaks are exact `U32F32`.
-//! - Sums are of magnitudes **truncated to Q16.16** (`bits >> 16`, each below
-//!   `2^31.5`), in `u64`: a cell, a region and the whole frame hold at most
-//!   `65535² < 2^32` pixels, so every sum stays below `2^63.5` and is exact.
+//! - Magnitudes arrive as the engine's `f32` pixels (non-negative and
+//!   finite). The sink compares and accumulates them in its own integer
+//!   format, `U32F32`: each magnitude is taken as `⌊m · 2³²⌋ / 2³²` in one
+//!   place (`magnitude_bits`), exact for every `f32` from `2⁻⁹` px to
+//!   below `2³²` px, truncated to a multiple of `2⁻³²` px below `2⁻⁹`,
+//!   saturated at `U32F32::MAX` from `2³²` px; a NaN or a negative value
+//!   (never the engine's) is 0, so it never counts as moving. Levels and
+//!   peaks are exact in that format, so the cues are integer arithmetic
+//!   from there on, the same on every target.
+//! - Sums are of those magnitudes **truncated to Q16.16** (`bits >> 16`, each
+//!   below `2⁴⁸`), in `u64`: a cell, a region and the whole frame hold at
+//!   most `65535² < 2^32` pixels, so a sum of magnitudes below `2¹⁶` px
+//!   stays below `2^64` and is exact (`|v_c|` is always below `2¹⁴` px:
+//!   `|V| < 2^23.5` and `s ≤ 1`); a larger sum saturates at `u64::MAX`.
 //!   A mean is `⌊sum / count⌋` in Q16.16, returned as `U32F32`: the mean of
 //!   the magnitudes within `2^-16` px.
 //! - Counts are `u32` (a frame has fewer than `2^32` pixels); coordinates
@@ -70,7 +79,7 @@
 
 use core::fmt;
 
-use fixed::types::{I16F16, U16F16, U32F32};
+use fixed::types::{U16F16, U32F32};
 use heapless::Vec;
 
 use reynoldsflow_core::{Config, FlowPixel, Pixels, Sink};
@@ -87,18 +96,19 @@ pub enum Field {
 }
 
 impl Field {
-    /// The field's magnitude at a pixel (`m_d` or `m_c`).
+    /// The field's magnitude at a pixel (`m_d` or `m_c`), px, as the
+    /// engine gives it (the cues compare it in their `U32F32`: module doc).
     #[inline(always)]
-    pub fn magnitude(self, px: &FlowPixel) -> U32F32 {
+    pub fn magnitude(self, px: &FlowPixel) -> f32 {
         match self {
             Field::DivergenceFree => px.m_d,
             Field::CurlFree => px.m_c,
         }
     }
 
-    /// The field's vector at a pixel (`v_d` or `v_c`), Q16.16 px, y down.
+    /// The field's vector at a pixel (`v_d` or `v_c`), px, y down.
     #[inline(always)]
-    pub fn vector(self, px: &FlowPixel) -> [I16F16; 2] {
+    pub fn vector(self, px: &FlowPixel) -> [f32; 2] {
         match self {
             Field::DivergenceFree => px.v_d,
             Field::CurlFree => px.v_c,
@@ -281,7 +291,7 @@ fn follow(r: u64, x: u64, s: u8) -> u64 {
 /// end of a frame, of a region whose root the cell is). 32 bytes.
 #[derive(Clone, Copy, Debug)]
 struct Cell {
-    /// Σ ⌊m · 2¹⁶⌋ (< 2^63.5, module doc).
+    /// Σ ⌊m · 2¹⁶⌋ (saturating; exact below 2⁶⁴, module doc).
     sum: u64,
     /// Largest magnitude, `U32F32` bits.
     peak: u64,
@@ -336,7 +346,8 @@ impl Cell {
             area: self.count,
             cells: self.cells,
             peak: U32F32::from_bits(self.peak),
-            // The mean is below 2^31.5 in Q16.16, so << 16 does not overflow.
+            // The mean is at most the largest term, below 2⁴⁸ (module doc),
+            // so << 16 does not overflow.
             mean: U32F32::from_bits(mean_q16 << 16),
         }
     }
@@ -391,7 +402,7 @@ pub struct MotionCues<const CELL: usize, const GW: usize, const GH: usize, const
     params: CueParams,
     /// This frame's level, `U32F32` bits.
     level: u64,
-    /// Σ ⌊m · 2¹⁶⌋ over every pixel seen this frame (< 2^63.5).
+    /// Σ ⌊m · 2¹⁶⌋ over every pixel seen this frame (saturating, module doc).
     frame_sum: u64,
     /// Largest magnitude seen this frame, bits.
     frame_peak: u64,
@@ -591,7 +602,7 @@ impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize>
 
     /// Accumulate one row segment's magnitudes.
     #[inline(always)]
-    fn accumulate(&mut self, y: usize, x: usize, magnitudes: &[U32F32]) {
+    fn accumulate(&mut self, y: usize, x: usize, magnitudes: &[f32]) {
         let level = self.level;
         let mut row = self.cells.get_mut(y / CELL);
         let (mut seg_sum, mut seg_peak) = (0u64, 0u64);
@@ -604,11 +615,10 @@ impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize>
                 break;
             };
             let mut acc = Cell::EMPTY;
-            for (k, m) in run.iter().enumerate() {
-                let m = m.to_bits();
-                // From the engine m < 2^47.5, so m >> 16 < 2^31.5 and a row
-                // of ≤ 65535 px sums below 2^47.5 (saturating for any other
-                // input).
+            for (k, &m) in run.iter().enumerate() {
+                let m = magnitude_bits(m);
+                // m >> 16 < 2⁴⁸: a row of ≤ 65535 px sums below 2⁶⁴ (and
+                // saturates for any other input).
                 seg_sum = seg_sum.saturating_add(m >> 16);
                 seg_peak = seg_peak.max(m);
                 if m > level {
@@ -652,6 +662,20 @@ impl<const CELL: usize, const GW: usize, const GH: usize, const N: usize> Sink
             Field::CurlFree => self.accumulate(y, x, pixels.m_c),
         }
     }
+}
+
+/// An engine magnitude (`f32` px) as the cues' `U32F32` bits: `⌊m · 2³²⌋`,
+/// saturating (module doc). The one place where the engine's `f32` enters
+/// the cues' integers.
+///
+/// `m · 2³²` is exact in `f32` (a power-of-two scale; it overflows to `+∞`
+/// only beyond `2⁹⁶` px), and Rust's `as` truncates toward zero, saturates
+/// at 0 and `u64::MAX` (`U32F32::MAX`'s bits) and takes NaN to 0: defined
+/// for every input, without a panic (`U32F32::saturating_from_num` would
+/// round to nearest instead, and panics on NaN).
+#[inline(always)]
+fn magnitude_bits(m: f32) -> u64 {
+    (m * 4_294_967_296.0) as u64
 }
 
 /// `⌊a · k / 2¹⁶⌋` for a `U32F32` `a` and a `U16F16` `k`, saturating at
@@ -714,10 +738,12 @@ mod tests {
     use reynoldsflow_core::Params;
     use std::vec::Vec as StdVec;
 
+    /// A pixel of `|v_d| = m`, `|v_c| = m / 2` (the tests' values are exact
+    /// in `f32`).
     fn px(m: f64) -> FlowPixel {
         FlowPixel {
-            m_d: U32F32::from_num(m),
-            m_c: U32F32::from_num(m / 2.0),
+            m_d: m as f32,
+            m_c: (m / 2.0) as f32,
             ..FlowPixel::default()
         }
     }
@@ -1043,12 +1069,46 @@ mod tests {
     }
 
     #[test]
+    fn magnitudes_enter_as_truncated_saturated_u32f32() {
+        let bits = |m: f32| U32F32::from_bits(magnitude_bits(m));
+        // Exact wherever U32F32 holds the f32: from 2⁻⁹ px up to below 2³² px,
+        // and any multiple of 2⁻³² px.
+        for m in [
+            1.0f32,
+            3.5,
+            0.1,
+            0.003,
+            2f32.powi(-9),
+            12_345.678,
+            4_294_967_040.0,
+        ] {
+            assert_eq!(bits(m), U32F32::from_num(m), "{m}");
+            assert_eq!(bits(m).to_num::<f32>(), m, "{m}");
+        }
+        assert_eq!(magnitude_bits(2f32.powi(-32)), 1);
+        assert_eq!(magnitude_bits(3.0 * 2f32.powi(-32)), 3);
+        // Below 2⁻⁹ px: truncated to a multiple of 2⁻³² px.
+        let tiny = 1e-6f32; // 4294.967296 units of 2⁻³²
+        assert_eq!(magnitude_bits(tiny), 4294);
+        assert_eq!(magnitude_bits(2f32.powi(-33)), 0);
+        assert_eq!(magnitude_bits(f32::from_bits(1)), 0); // smallest subnormal
+        // Saturated from 2³² px; NaN, negatives and zeros are 0.
+        for m in [2f32.powi(32), 1e30, f32::MAX, f32::INFINITY] {
+            assert_eq!(bits(m), U32F32::MAX, "{m}");
+        }
+        for m in [0.0f32, -0.0, -1.0, f32::NEG_INFINITY, f32::NAN] {
+            assert_eq!(magnitude_bits(m), 0, "{m}");
+        }
+    }
+
+    #[test]
     fn extreme_magnitudes_do_not_overflow() {
         let (w, h) = (64, 64);
         let config = Config::new(w, h, Params::DEFAULT).unwrap();
         let mut cues = MotionCues::<64, 1, 1, 1>::new(&config, absolute(0.0)).unwrap();
+        // Above any real magnitude: saturated at U32F32::MAX.
         let max = FlowPixel {
-            m_d: U32F32::from_bits((i32::MAX as u64) << 16 << 1), // above any real magnitude
+            m_d: f32::MAX,
             ..FlowPixel::default()
         };
         for y in 0..h {
@@ -1056,8 +1116,10 @@ mod tests {
         }
         let r = cues.end_frame()[0];
         assert_eq!(r.area, 64 * 64);
-        assert_eq!(r.peak, max.m_d);
-        assert_eq!(r.mean, max.m_d); // its low 16 bits are zero
+        assert_eq!(r.peak, U32F32::MAX);
+        // Every term is U32F32::MAX truncated to Q16.16, and so is the mean.
+        assert_eq!(r.mean, U32F32::from_bits(u64::MAX >> 16 << 16));
+        assert_eq!(cues.last_frame().mean, r.mean);
         // Fed more than a frame, nothing panics.
         for _ in 0..3 {
             for y in 0..h {
@@ -1065,6 +1127,18 @@ mod tests {
             }
         }
         assert_eq!(cues.end_frame()[0].area, 3 * 64 * 64);
+        // Values the engine never gives: NaN and negatives count as 0 (not
+        // above a level of 0), infinity as U32F32::MAX.
+        let m_d = |m_d| FlowPixel {
+            m_d,
+            ..FlowPixel::default()
+        };
+        let odd = [m_d(f32::NAN), m_d(-2.0), m_d(f32::INFINITY), m_d(1.0)];
+        cues.row(5, 10, Rows::of(&odd).pixels());
+        let r = cues.end_frame()[0];
+        assert_eq!((r.x_min, r.x_max, r.area), (12, 13, 2));
+        assert_eq!(r.peak, U32F32::MAX);
+        assert_eq!(cues.last_frame().pixels, 4);
     }
 
     #[test]

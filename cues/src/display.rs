@@ -13,7 +13,6 @@
 
 use core::f32::consts::PI;
 
-use fixed::types::I16F16;
 use micromath::F32Ext;
 
 use reynoldsflow_core::{ByteScale, Config, Error, FlowPixel, Pixels, Sink, rgb};
@@ -61,18 +60,23 @@ pub const fn hsv(hue: u16, saturation: u8, value: u8) -> [u8; 3] {
 /// The hue of a direction (x right, y down, so angles turn clockwise on
 /// screen): right is red (0), down yellow-green (384), left cyan (768), up
 /// violet (1152). `round(atan2(y, x) · 1536 / 2π) mod 1536`, with micromath's
-/// `atan2`; the zero vector is 0.
-pub fn direction_hue(v: [I16F16; 2]) -> u16 {
+/// `atan2`; the zero vector is 0. Any finite vector, however long or short
+/// (the components are first divided by the larger of their magnitudes, so
+/// the `atan2` approximation's squares neither overflow nor vanish); a
+/// non-finite component gives some hue, without a panic.
+pub fn direction_hue(v: [f32; 2]) -> u16 {
     let [x, y] = v;
-    if x == I16F16::ZERO && y == I16F16::ZERO {
+    let scale = x.abs().max(y.abs());
+    if scale == 0.0 {
         return 0;
     }
-    // The common 2¹⁶ scale of the bits cancels in the angle. `as f32` rounds
-    // to 24 bits, far finer than a hue step.
-    let (x, y) = (x.to_bits() as f32, y.to_bits() as f32);
+    // The common scale cancels in the angle: the larger component becomes
+    // ±1 exactly, the other rounds once (far finer than a hue step).
+    let (x, y) = (x / scale, y / scale);
     let angle = F32Ext::atan2(y, x); // [-π, π]
     let steps = angle * (f32::from(HUE_STEPS) / (2.0 * PI));
-    // Round half away from zero (no `f32::round` in `core`); `as` saturates.
+    // Round half away from zero (no `f32::round` in `core`); `as` saturates
+    // (and takes a NaN to 0).
     let steps = if steps >= 0.0 {
         steps + 0.5
     } else {
@@ -82,7 +86,7 @@ pub fn direction_hue(v: [I16F16; 2]) -> u16 {
 }
 
 /// What a screen shows of a computed frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum View {
     /// The frame `fⁿ` in gray.
@@ -198,7 +202,7 @@ impl Sink for Rgb565Sink<'_> {
 mod tests {
     use super::*;
     use crate::test_rows::Rows;
-    use fixed::types::{U16F16, U32F32};
+    use fixed::types::U16F16;
 
     fn exact_hsv(hue: f64, s: f64, v: f64) -> [f64; 3] {
         let h = hue / 256.0;
@@ -254,7 +258,7 @@ mod tests {
 
     #[test]
     fn hue_follows_direction_within_a_step() {
-        let v = |x: f64, y: f64| [I16F16::from_num(x), I16F16::from_num(y)];
+        let v = |x: f64, y: f64| [x as f32, y as f32];
         assert_eq!(direction_hue(v(1.0, 0.0)), 0);
         assert_eq!(direction_hue(v(0.0, 2.5)), 384);
         assert_eq!(direction_hue(v(-0.01, 0.0)), 768);
@@ -267,18 +271,36 @@ mod tests {
             let diff = (got - want).rem_euclid(1536.0);
             assert!(diff.min(1536.0 - diff) <= 1.5, "{k}°: {got} vs {want}");
         }
-        // Extreme components do not break it.
-        assert!(direction_hue([I16F16::MIN, I16F16::MIN]) < HUE_STEPS);
-        assert!(direction_hue([I16F16::MAX, I16F16::DELTA]) <= 1);
+        // Extreme components do not break it: the direction of a vector
+        // is that of any multiple of it, from subnormal to f32::MAX.
+        let tiny = f32::from_bits(1); // 2⁻¹⁴⁹
+        for scale in [tiny, 1e-30, 2f32.powi(-92), 1e-6, 1.0, 3e4, 1e30, f32::MAX] {
+            let hue = |x: f32, y: f32| direction_hue([x * scale, y * scale]);
+            assert_eq!(hue(1.0, 0.0), 0, "{scale}");
+            assert_eq!(hue(0.0, 1.0), 384, "{scale}");
+            assert_eq!(hue(-1.0, 0.0), 768, "{scale}");
+            assert_eq!(hue(0.0, -1.0), 1152, "{scale}");
+            assert_eq!(hue(-1.0, -1.0), 960, "{scale}"); // up-left: 1536 · 5/8
+        }
+        assert_eq!(direction_hue([f32::MAX, tiny]), 0);
+        assert_eq!(direction_hue([-tiny, f32::MIN]), 1152);
+        // Not from the engine, but no panic and a hue in range.
+        for v in [
+            [f32::NAN, 1.0],
+            [f32::INFINITY, 1.0],
+            [f32::NEG_INFINITY, f32::NAN],
+        ] {
+            assert!(direction_hue(v) < HUE_STEPS, "{v:?}");
+        }
     }
 
     #[test]
     fn views_of_a_pixel() {
         let px = FlowPixel {
-            v_c: [I16F16::from_num(-2), I16F16::ZERO],
-            v_d: [I16F16::ZERO, I16F16::from_num(-1)],
-            m_c: U32F32::from_num(2),
-            m_d: U32F32::from_num(1),
+            v_c: [-2.0, 0.0],
+            v_d: [0.0, -1.0],
+            m_c: 2.0,
+            m_d: 1.0,
             luma: 77,
         };
         let k = |k: f64| ByteScale::fixed(U16F16::from_num(k));

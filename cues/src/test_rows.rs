@@ -2,20 +2,19 @@
 
 use std::vec::Vec;
 
-use fixed::types::{I16F16, U32F32};
 use reynoldsflow_core::{Fields, FlowPixel, Pixels};
 
 /// Each quantity of some pixels as a row.
 pub struct Rows {
-    m_d: Vec<U32F32>,
-    m_c: Vec<U32F32>,
+    m_d: Vec<f32>,
+    m_c: Vec<f32>,
     luma: Vec<u8>,
-    fields: [Vec<I16F16>; 4],
+    fields: [Vec<f32>; 4],
 }
 
 impl Rows {
     pub fn of(pixels: &[FlowPixel]) -> Self {
-        let row = |f: fn(&FlowPixel) -> I16F16| pixels.iter().map(f).collect();
+        let row = |f: fn(&FlowPixel) -> f32| pixels.iter().map(f).collect();
         Self {
             m_d: pixels.iter().map(|p| p.m_d).collect(),
             m_c: pixels.iter().map(|p| p.m_c).collect(),

@@ -1,6 +1,6 @@
 //! A camera's view of the core: frame rows arrive one at a time, and each
 //! output row leaves as soon as the 7 rows below it are in. Two 64-px column
-//! strips cover a 96×48 frame, each with its own 9 KiB engine; the
+//! strips cover a 96×48 frame, each with its own 19 KiB engine; the
 //! representation's R channel (|v_d|) is printed as an ASCII motion map.
 //!
 //! `cargo run -p reynoldsflow-examples`

@@ -1,4 +1,4 @@
-//! The fixed-point core through its public API: frame sizes 1..=300 per
+//! The core through its public API: frame sizes 1..=300 per
 //! side, any tile size, intensity scales and λ in and out of their ranges,
 //! both scalings, and rows pushed through `RowStream` strip by strip with
 //! arbitrary strip widths, row slack and misuse (short rows, rows past the
@@ -7,14 +7,14 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use fixed::types::{I16F16, U16F16, U32F32};
+use fixed::types::{U16F16, U32F32};
 use libfuzzer_sys::fuzz_target;
 use reynoldsflow_core::{
     Arrays, Config, Engine, Error, ExtremesSink, FramePair, IntensityScale, MemorySize, Params,
     Plan, RgbSink, RowStream, Scaling, SliceEngine, represent,
 };
 
-/// Tiles up to 80 columns: the README's 640×480-in-32-KiB engine.
+/// Tiles up to 80 columns (eight strips over 640 px).
 const COLS: usize = 94;
 
 #[derive(Arbitrary, Debug)]
@@ -121,18 +121,10 @@ fuzz_target!(|case: Case| {
                 "tiles {tw}x{th} of {w}x{h} differ from strips"
             );
             let size = MemorySize::for_tile_width(plan.tile_width()).expect("small sizes");
-            let (mut words, mut halves) = (vec![0; size.words], vec![0; size.halves]);
-            let mut bytes = vec![0; size.bytes];
-            let mut magnitudes = vec![U32F32::ZERO; size.magnitudes];
-            let mut fields = vec![I16F16::ZERO; size.fields];
-            let mut sliced = SliceEngine::new(
-                &mut words,
-                &mut halves,
-                &mut bytes,
-                &mut magnitudes,
-                &mut fields,
-            )
-            .expect("memory of its size");
+            let (mut words, mut floats) = (vec![0; size.words], vec![0.0; size.floats]);
+            let (mut halves, mut bytes) = (vec![0; size.halves], vec![0; size.bytes]);
+            let mut sliced = SliceEngine::new(&mut words, &mut floats, &mut halves, &mut bytes)
+                .expect("memory of its size");
             assert_eq!(sliced.max_tile_width(), plan.tile_width());
             represent(&mut sliced, &job, scaling, &mut tiled, ()).expect("checked");
             assert!(

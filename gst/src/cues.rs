@@ -28,8 +28,8 @@ pub const REGION_STRUCTURE: &str = "reynoldsflow-region";
 pub const MESSAGE_STRUCTURE: &str = "reynoldsflow-cues";
 
 /// What the cues look for: `|v_c|` (smooth, one compact blob per small
-/// mover; the core's `cues` module doc) above `threshold` px, regions of at
-/// least `min_area` px.
+/// mover; the `cues` module doc of `reynoldsflow-cues`) above `threshold`
+/// px, regions of at least `min_area` px.
 pub fn params(threshold: f64, min_area: u32) -> CueParams {
     CueParams {
         field: Field::CurlFree,

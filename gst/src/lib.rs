@@ -1,8 +1,9 @@
 //! GStreamer plugin `reynoldsflow`: the element of the same name turns a
 //! camera's frames (GRAY8, I420 or NV12; the luma plane) into the
 //! ReynoldsFlow representation (RGB, same size), one result per
-//! consecutive frame pair, computed by the fixed-point core exactly as
-//! `reynoldsflow run` computes it. See the README's GStreamer section.
+//! consecutive frame pair, computed by the core (`reynoldsflow-core`)
+//! exactly as `reynoldsflow run` computes it. See the README's GStreamer
+//! section.
 
 use gst::glib;
 

@@ -13,7 +13,7 @@ use reynoldsflow_core::{
     ByteScale, Error, FramePair, Job, Memory, Plan, Scaling, Sink, TileEngine,
 };
 
-use crate::fixed_engine::{Kept, bytes_from_kept};
+use crate::fixed_engine::bytes_from_kept;
 
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -155,7 +155,7 @@ fn baseline<K: Kind, M: Memory, S: Sink>(
 /// take AVX2's lanes.
 pub(crate) fn kept_to_bytes(
     isa: Isa,
-    kept: &Kept,
+    kept: [&[f32]; 2],
     luma: &[u8],
     rgb: &mut [u8],
     scales: &[ByteScale; 2],
@@ -187,7 +187,7 @@ best_targets! {
     }
 
     fn kept_to_bytes_best(
-        kept: &Kept,
+        kept: [&[f32]; 2],
         luma: &[u8],
         rgb: &mut [u8],
         scales: &[ByteScale; 2],

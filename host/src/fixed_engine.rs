@@ -11,7 +11,6 @@
 //! one pair can also be spread over threads ([`pixels_on`], the element's
 //! latency path); every tiling gives the same bytes.
 
-use fixed::types::{I16F16, U32F32};
 use std::sync::Mutex;
 
 use reynoldsflow_core::{
@@ -20,6 +19,7 @@ use reynoldsflow_core::{
 };
 
 use crate::dispatch::{self, Isa, Pass};
+use crate::page_buffer::{ByteBuffer, PageBuffer};
 use crate::{FlowPlanes, Gray, HostError, workers};
 
 /// The widest of the host's default tiles: full-height strips of at most
@@ -47,10 +47,9 @@ pub fn strip_width(width: usize) -> usize {
 #[derive(Default)]
 pub struct HostEngine {
     words: Vec<i32>,
+    floats: Vec<f32>,
     halves: Vec<i16>,
     bytes: Vec<u8>,
-    magnitudes: Vec<U32F32>,
-    fields: Vec<I16F16>,
 }
 
 impl HostEngine {
@@ -65,16 +64,14 @@ impl HostEngine {
         let size = MemorySize::for_tile_width(plan.tile_width())
             .ok_or(HostError::Core(reynoldsflow_core::Error::FrameTooLarge))?;
         grow(&mut self.words, size.words, 0);
+        grow(&mut self.floats, size.floats, 0.0);
         grow(&mut self.halves, size.halves, 0);
         grow(&mut self.bytes, size.bytes, 0);
-        grow(&mut self.magnitudes, size.magnitudes, U32F32::ZERO);
-        grow(&mut self.fields, size.fields, I16F16::ZERO);
         Ok(SliceEngine::new(
             &mut self.words,
+            &mut self.floats,
             &mut self.halves,
             &mut self.bytes,
-            &mut self.magnitudes,
-            &mut self.fields,
         )?)
     }
 }
@@ -89,9 +86,9 @@ fn grow<T: Clone>(buffer: &mut Vec<T>, len: usize, zero: T) {
 /// The core's output for a frame pair, row-major planes of `width · height`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FixedOutput {
-    /// `v_c` and `v_d`, the exact values of the core's Q16.16 (`bits / 65536`).
+    /// `v_c` and `v_d`, the exact values of the core's `f32`s.
     pub planes: FlowPlanes,
-    /// `|v_d|` as the core computes it (the exact value of its Q32.32).
+    /// `|v_d|` as the core computes it (the exact value of its `f32`).
     pub m_d: Vec<f64>,
     /// `|v_c|`.
     pub m_c: Vec<f64>,
@@ -206,20 +203,20 @@ pub fn pixels_on(
 }
 
 /// The planes of a [`FixedOutput`] from the core's pixels; every conversion
-/// is exact (Q16.16 and Q32.32 below 2⁴⁸ fit f64's mantissa).
+/// is exact (`f32` to `f64`).
 fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> FixedOutput {
-    let plane = |f: &dyn Fn(&FlowPixel) -> f64| pixels.iter().map(f).collect();
+    let plane = |f: &dyn Fn(&FlowPixel) -> f32| pixels.iter().map(|p| f64::from(f(p))).collect();
     FixedOutput {
         planes: FlowPlanes {
             width,
             height,
-            vcx: plane(&|p| p.v_c[0].to_num()),
-            vcy: plane(&|p| p.v_c[1].to_num()),
-            vdx: plane(&|p| p.v_d[0].to_num()),
-            vdy: plane(&|p| p.v_d[1].to_num()),
+            vcx: plane(&|p| p.v_c[0]),
+            vcy: plane(&|p| p.v_c[1]),
+            vdx: plane(&|p| p.v_d[0]),
+            vdy: plane(&|p| p.v_d[1]),
         },
-        m_d: plane(&|p| p.m_d.to_num()),
-        m_c: plane(&|p| p.m_c.to_num()),
+        m_d: plane(&|p| p.m_d),
+        m_c: plane(&|p| p.m_c),
         rep,
     }
 }
@@ -350,12 +347,12 @@ impl FrameEngine {
         params: Params,
         tile: Option<(usize, usize)>,
         scaling: Scaling,
-        rgb: &mut Vec<u8>,
+        rgb: &mut impl ByteBuffer,
     ) -> Result<(), HostError> {
         let (plan, frames) = prepare(prev, next, params, tile)?;
         let (width, height) = prev.size();
-        // Every byte is overwritten below; resizing a reused buffer of the same size is free.
-        rgb.resize(3 * width * height, 0);
+        // Every byte is overwritten below; a reused buffer of the same size costs nothing.
+        let rgb = rgb.overwrite(3 * width * height)?;
         let engine = &mut self.engine.engine(&plan)?;
         if !matches!(scaling, Scaling::PerFrameMinMax) {
             // Known gains: the core's `represent` streams rows into the bytes in one pass.
@@ -369,136 +366,86 @@ impl FrameEngine {
                 &mut (),
             )?);
         }
-        self.kept.resize(width * height);
+        let planes = self.kept.planes(width * height)?;
         let mut sink = KeptMagnitudes {
             width,
-            kept: &mut self.kept,
+            planes,
             extremes: ExtremesSink::default(),
         };
         dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
         let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.extremes))?;
-        dispatch::kept_to_bytes(self.isa, &self.kept, &prev.pixels, rgb, &[scale_d, scale_c]);
+        let [m_d, m_c] = sink.planes;
+        let kept = [&*m_d, &*m_c];
+        dispatch::kept_to_bytes(self.isa, kept, &prev.pixels, rgb, &[scale_d, scale_c]);
         Ok(())
     }
 }
 
-/// Pixels per batch of the min–max byte step ([`rgb_batch`]): enough for
-/// the magnitudes' joining and both byte loops to take vector lanes (at
-/// 32 the joining stayed scalar: `run`, 4 pairs at 640×480, 197 M
-/// instructions against 181 M at 64, callgrind).
-const BYTE_BATCH: usize = 64;
+/// Pixels per batch of the min–max byte step ([`rgb_batch`]).
+const BYTE_BATCH: usize = reynoldsflow_core::RGB_BATCH;
 
 /// The second step of per-frame min–max: each pixel's kept magnitudes and
 /// its `fⁿ` byte (`luma`: the frame itself, the B channel unchanged) to its
 /// three RGB bytes, once the frame's scales are known. Compiled for each
 /// ISA by [`dispatch::kept_to_bytes`].
 #[inline(always)]
-pub(crate) fn bytes_from_kept(kept: &Kept, luma: &[u8], rgb: &mut [u8], scales: &[ByteScale; 2]) {
+pub(crate) fn bytes_from_kept(
+    [m_d, m_c]: [&[f32]; 2],
+    luma: &[u8],
+    rgb: &mut [u8],
+    scales: &[ByteScale; 2],
+) {
     let [scale_d, scale_c] = scales;
-    let [m_d, m_c] = &kept.planes;
-    let (luma, luma_rest) = luma.as_chunks::<BYTE_BATCH>();
-    let (out, out_rest) = rgb.as_chunks_mut::<3>().0.as_chunks_mut::<BYTE_BATCH>();
-    let batches = m_d.batches().zip(m_c.batches()).zip(luma);
-    for (out, ((m_d, m_c), luma)) in out.iter_mut().zip(batches) {
-        rgb_batch([&m_d, &m_c], luma, [scale_d, scale_c], out);
+    let pixels = luma.len().min(m_d.len()).min(m_c.len());
+    let (m_d, m_c, luma) = (&m_d[..pixels], &m_c[..pixels], &luma[..pixels]);
+    let out = rgb.as_chunks_mut::<3>().0;
+    let (batches, rest) = out.as_chunks_mut::<BYTE_BATCH>();
+    let inputs = m_d
+        .as_chunks::<BYTE_BATCH>()
+        .0
+        .iter()
+        .zip(m_c.as_chunks::<BYTE_BATCH>().0)
+        .zip(luma.as_chunks::<BYTE_BATCH>().0);
+    let whole = batches.len().min(pixels / BYTE_BATCH);
+    for (out, ((m_d, m_c), luma)) in batches.iter_mut().zip(inputs) {
+        rgb_batch([m_d, m_c], luma, [scale_d, scale_c], out);
     }
-    let start = luma.len() * BYTE_BATCH;
-    let rest = (start..).zip(luma_rest);
-    for (out, (i, &luma)) in out_rest.iter_mut().zip(rest) {
-        let (m_d, m_c) = (m_d.get(i), m_c.get(i));
-        *out = reynoldsflow_core::rgb(
-            &FlowPixel {
-                m_d,
-                m_c,
-                luma,
-                ..FlowPixel::default()
-            },
-            scale_d,
-            scale_c,
-        );
+    let start = whole * BYTE_BATCH;
+    let tail = m_d[start..].iter().zip(&m_c[start..]).zip(&luma[start..]);
+    for (out, ((&m_d, &m_c), &luma)) in rest.iter_mut().zip(tail) {
+        let pixel = FlowPixel {
+            m_d,
+            m_c,
+            luma,
+            ..FlowPixel::default()
+        };
+        *out = reynoldsflow_core::rgb(&pixel, scale_d, scale_c);
     }
 }
 
 /// What per-frame min–max keeps of a pair until its scales are known: both
 /// magnitudes of every pixel, each in its own plane (so that the byte step
-/// reads them in lanes).
+/// reads them in lanes), in a [`PageBuffer`] (7.4 MB at 1280×720).
 #[derive(Default)]
-pub(crate) struct Kept {
-    /// `|v_d|`, `|v_c|`.
-    planes: [KeptPlane; 2],
+struct Kept {
+    buffer: PageBuffer,
 }
 
 impl Kept {
-    /// Room for `pixels` (grown, never shrunk: every value is overwritten).
-    fn resize(&mut self, pixels: usize) {
-        for plane in &mut self.planes {
-            plane.resize(pixels);
-        }
+    /// The planes `[|v_d|, |v_c|]` of `pixels` each (the memory grows,
+    /// never shrinks: every value is overwritten).
+    fn planes(&mut self, pixels: usize) -> Result<[&mut [f32]; 2], HostError> {
+        let floats = self.buffer.floats(2 * pixels)?;
+        let (m_d, m_c) = floats.split_at_mut(pixels);
+        Ok([m_d, m_c])
     }
-}
-
-/// One magnitude of every pixel in 48 bits, all a Q32.32 magnitude from
-/// the engine has (`≤ 2⁴⁸ − 1`, `reynoldsflow_core`'s saturation): its low
-/// word and its high half-word, in two planes. 6 bytes a pixel instead of
-/// 8: at 1280×720 the two planes of a pair are 11 MiB, not 14.7, and two
-/// workers' fit a 32 MiB L3 cache better.
-#[derive(Default)]
-struct KeptPlane {
-    low: Vec<u32>,
-    high: Vec<u16>,
-}
-
-impl KeptPlane {
-    fn resize(&mut self, pixels: usize) {
-        self.low.resize(pixels, 0);
-        self.high.resize(pixels, 0);
-    }
-
-    /// Keep `row` from pixel `start` on.
-    #[inline(always)]
-    fn store(&mut self, start: usize, row: &[U32F32]) {
-        let span = start..start + row.len();
-        let pixels = self.low[span.clone()].iter_mut().zip(&mut self.high[span]);
-        for ((low, high), m) in pixels.zip(row) {
-            let m = m.to_bits();
-            debug_assert!(m >> 48 == 0, "a magnitude above 2⁴⁸: {m:#x}");
-            (*low, *high) = (m as u32, (m >> 32) as u16);
-        }
-    }
-
-    /// Pixel `i` (zero past the end).
-    #[inline(always)]
-    fn get(&self, i: usize) -> U32F32 {
-        let (low, high) = (self.low.get(i), self.high.get(i));
-        join(*low.unwrap_or(&0), *high.unwrap_or(&0))
-    }
-
-    /// The whole batches of `BYTE_BATCH` pixels.
-    #[inline(always)]
-    fn batches(&self) -> impl Iterator<Item = [U32F32; BYTE_BATCH]> + '_ {
-        let low = self.low.as_chunks::<BYTE_BATCH>().0;
-        let high = self.high.as_chunks::<BYTE_BATCH>().0;
-        low.iter().zip(high).map(|(low, high)| {
-            let mut batch = [U32F32::ZERO; BYTE_BATCH];
-            for ((m, &low), &high) in batch.iter_mut().zip(low).zip(high) {
-                *m = join(low, high);
-            }
-            batch
-        })
-    }
-}
-
-/// A magnitude from its low word and high half-word.
-#[inline(always)]
-fn join(low: u32, high: u16) -> U32F32 {
-    U32F32::from_bits(u64::from(high) << 32 | u64::from(low))
 }
 
 /// The first step of per-frame min–max: each row's magnitudes into the
 /// kept planes, and the frame's extremes.
 struct KeptMagnitudes<'a> {
     width: usize,
-    kept: &'a mut Kept,
+    planes: [&'a mut [f32]; 2],
     extremes: ExtremesSink,
 }
 
@@ -510,9 +457,11 @@ impl Sink for KeptMagnitudes<'_> {
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         let start = y * self.width + x;
-        let [m_d, m_c] = &mut self.kept.planes;
-        m_d.store(start, pixels.m_d);
-        m_c.store(start, pixels.m_c);
+        for (plane, row) in self.planes.iter_mut().zip([pixels.m_d, pixels.m_c]) {
+            if let Some(kept) = plane.get_mut(start..start + row.len()) {
+                kept.copy_from_slice(row);
+            }
+        }
         self.extremes.row(y, x, pixels);
     }
 }
@@ -592,7 +541,7 @@ mod tests {
                         "{threads} threads, {tile:?}, {scaling:?}"
                     );
                 }
-                let m_d: Vec<f64> = pixels.iter().map(|p| p.m_d.to_num()).collect();
+                let m_d: Vec<f64> = pixels.iter().map(|p| f64::from(p.m_d)).collect();
                 assert!(m_d == serial.m_d, "{threads} threads, {tile:?}");
             }
         }

@@ -28,6 +28,7 @@ pub mod image_io;
 pub mod limits;
 pub mod npy;
 pub mod outputs;
+pub mod page_buffer;
 pub mod pair_pool;
 pub mod pipeline;
 pub mod reference;

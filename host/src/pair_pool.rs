@@ -138,10 +138,10 @@ impl PairPixels<'_> {
             planes: FlowPlanes {
                 width: self.width,
                 height: self.height,
-                vcx: plane(|p| p.v_c[0].to_num()),
-                vcy: plane(|p| p.v_c[1].to_num()),
-                vdx: plane(|p| p.v_d[0].to_num()),
-                vdy: plane(|p| p.v_d[1].to_num()),
+                vcx: plane(|p| f64::from(p.v_c[0])),
+                vcy: plane(|p| f64::from(p.v_c[1])),
+                vdx: plane(|p| f64::from(p.v_d[0])),
+                vdy: plane(|p| f64::from(p.v_d[1])),
             },
             rep,
         };
@@ -203,7 +203,7 @@ mod tests {
                 let next = Frame::packed(&b, w, h).unwrap();
                 let out = pool.compute(prev, next).unwrap();
                 assert!(out.image(Variant::Dc) == serial.rep, "{threads} threads");
-                let m_d: Vec<f64> = out.pixels().iter().map(|p| p.m_d.to_num()).collect();
+                let m_d: Vec<f64> = out.pixels().iter().map(|p| f64::from(p.m_d)).collect();
                 assert!(m_d == serial.m_d);
             }
         }

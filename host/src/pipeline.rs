@@ -27,6 +27,7 @@ use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scal
 use crate::cli::values::{EngineKind, ScaleArg, TileSize};
 use crate::fixed_engine::FrameEngine;
 use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame_into, y4m_header};
+use crate::page_buffer::{ByteBuffer, PageBytes};
 use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
 use crate::{Gray, HostError};
@@ -141,13 +142,13 @@ impl Compute {
         engine: &mut FrameEngine,
         prev: &Gray,
         next: &Gray,
-        rgb: &mut Vec<u8>,
+        rgb: &mut impl ByteBuffer,
     ) -> Result<(), HostError> {
         match self.fixed {
             None => {
                 let fields = self.pair_with(engine, prev, next)?;
-                rgb.clear();
-                rgb.extend_from_slice(&fields.rep);
+                rgb.overwrite(fields.rep.len())?
+                    .copy_from_slice(&fields.rep);
                 Ok(())
             }
             Some((params, scaling)) => {
@@ -308,7 +309,7 @@ impl<T> Pool<T> {
 /// (workers fill them, the writer hands them back).
 struct Buffers {
     frames: Pool<Frame>,
-    payloads: Pool<Vec<u8>>,
+    payloads: Pool<PageBytes>,
 }
 
 /// A pair to compute.
@@ -323,7 +324,7 @@ enum Msg {
         index: usize,
         stem: String,
         size: (usize, usize),
-        payload: Vec<u8>,
+        payload: PageBytes,
     },
     /// A pair failed: stop at once.
     Failed(HostError),
@@ -539,7 +540,7 @@ impl Worker<'_> {
 
     /// One pair's result, a panic included: it must not leave the others
     /// waiting for this pair.
-    fn job_message(&mut self, job: &Job, payload: Vec<u8>) -> Msg {
+    fn job_message(&mut self, job: &Job, payload: PageBytes) -> Msg {
         let result =
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.work(job, payload)))
                 .unwrap_or_else(|_| {
@@ -561,49 +562,61 @@ impl Worker<'_> {
 
     /// Compute one pair, then write its files or encode its stream frame
     /// into `payload` (a used buffer, overwritten), which is returned.
-    fn work(&mut self, job: &Job, mut payload: Vec<u8>) -> Result<Vec<u8>, HostError> {
+    fn work(&mut self, job: &Job, mut payload: PageBytes) -> Result<PageBytes, HostError> {
         let (prev, next) = (&job.prev.gray, &job.next.gray);
         if self.needs_fields {
             let fields = self.compute.pair_with(&mut self.engine, prev, next)?;
             if let Some(dir) = self.dir {
                 dir.write(&job.prev.stem, &fields)?;
             }
-            payload.clear();
             match self.stream {
-                Some((spec, StreamFormat::Rgb24)) => payload.extend(spec.image(&fields)),
-                Some((spec, StreamFormat::Y4m)) => {
-                    y4m_frame_into(&spec.image(&fields), &mut payload)
+                Some((spec, StreamFormat::Rgb24)) => {
+                    let image = spec.image(&fields);
+                    payload.overwrite(image.len())?.copy_from_slice(&image);
                 }
-                None => {}
+                Some((spec, StreamFormat::Y4m)) => {
+                    y4m_frame_into(&spec.image(&fields), &mut payload)?
+                }
+                None => {
+                    payload.overwrite(0)?;
+                }
             }
             return Ok(payload);
         }
         // Raw RGB goes out as computed; Y4M and files are made from the image.
-        let image = match self.stream {
-            Some((_, StreamFormat::Rgb24)) => &mut payload,
-            _ => &mut self.rgb,
-        };
-        self.compute
-            .representation(&mut self.engine, prev, next, image)?;
         let spec = self.dir.map_or_else(
             || self.stream.expect("a folder or a stream").0,
             DirWriter::spec,
         );
+        let image: &mut [u8] = match self.stream {
+            Some((_, StreamFormat::Rgb24)) => {
+                self.compute
+                    .representation(&mut self.engine, prev, next, &mut payload)?;
+                &mut payload
+            }
+            _ => {
+                self.compute
+                    .representation(&mut self.engine, prev, next, &mut self.rgb)?;
+                &mut self.rgb
+            }
+        };
         spec.arrange(image);
         if let Some(dir) = self.dir {
             dir.write_image(&job.prev.stem, prev.width, prev.height, image)?;
         }
         match self.stream {
             Some((_, StreamFormat::Rgb24)) => {}
-            Some((_, StreamFormat::Y4m)) => y4m_frame_into(&self.rgb, &mut payload),
-            None => payload.clear(),
+            Some((_, StreamFormat::Y4m)) => y4m_frame_into(&self.rgb, &mut payload)?,
+            None => {
+                payload.overwrite(0)?;
+            }
         }
         Ok(payload)
     }
 }
 
 /// A computed result waiting for its turn: stem, frame size, stream bytes.
-type Delivery = (String, (usize, usize), Vec<u8>);
+type Delivery = (String, (usize, usize), PageBytes);
 
 /// This thread's part: results in frame order, the stream, the count.
 struct Collector<'a, 'w, 'o> {
@@ -611,7 +624,7 @@ struct Collector<'a, 'w, 'o> {
     /// unblock it when the run stops.
     tokens: Option<SyncSender<()>>,
     stop: &'a AtomicBool,
-    payloads: &'a Pool<Vec<u8>>,
+    payloads: &'a Pool<PageBytes>,
     dir: Option<&'a DirWriter>,
     stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
     fps: (u32, u32),
@@ -639,7 +652,7 @@ impl Collector<'_, '_, '_> {
         let mut pending: BTreeMap<usize, Delivery> = BTreeMap::new();
         let mut input_error: Option<HostError> = None;
         let mut end = None;
-        let mut last: Option<(String, Vec<u8>)> = None;
+        let mut last: Option<(String, PageBytes)> = None;
         for msg in msgs {
             match msg {
                 Msg::Done {
@@ -666,7 +679,11 @@ impl Collector<'_, '_, '_> {
                     break;
                 }
                 on_output();
-                if let Some((_, used)) = last.replace((stem, payload)) {
+                // The last result is kept only to be repeated (`--keep-count`);
+                // otherwise its buffer goes straight back to the workers.
+                if !self.keep_count {
+                    self.payloads.put(payload);
+                } else if let Some((_, used)) = last.replace((stem, payload)) {
                     self.payloads.put(used);
                 }
             }

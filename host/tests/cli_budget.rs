@@ -18,21 +18,27 @@ fn budget(args: &[&str]) -> (bool, String, String) {
     )
 }
 
-/// The best shape for 640×480 in 32 KiB: 92-px strips (seven of them) fit,
-/// 93-px ones do not, and 80-px ones (eight) pay more halo.
+/// The best shape for 640×480 in 32 KiB: six strips, the fewest that fit
+/// (a strip of 115 px is the widest that does, 128-px ones for five strips
+/// do not), the narrowest of them 107 px (least memory at that overhead);
+/// 80-px strips (eight) pay more halo.
 #[test]
-fn budget_of_92_px_strips_fits_32_kib_at_1_19_overhead() {
-    let (ok, stdout, _) = budget(&["--width", "640", "--height", "480", "--tile", "92x480"]);
+fn budget_of_107_px_strips_fits_32_kib_at_1_16_overhead() {
+    let (ok, stdout, _) = budget(&["--width", "640", "--height", "480", "--tile", "107x480"]);
     assert!(ok);
     assert_eq!(
         stdout,
         format!(
-            "working_bytes={} overhead=1.1868\n",
-            Engine::<106>::WORKING_BYTES
+            "working_bytes={} overhead=1.1642\n",
+            Engine::<121>::WORKING_BYTES
         )
     );
-    const { assert!(Engine::<106>::WORKING_BYTES <= 32 * 1024) };
-    const { assert!(Engine::<107>::WORKING_BYTES > 32 * 1024) };
+    const { assert!(Engine::<121>::WORKING_BYTES <= 32 * 1024) };
+    const { assert!(Engine::<129>::WORKING_BYTES <= 32 * 1024) };
+    const { assert!(Engine::<130>::WORKING_BYTES > 32 * 1024) };
+    let (ok, stdout, _) = budget(&["--width", "640", "--height", "480", "--tile", "128x480"]);
+    assert!(ok);
+    assert!(stdout.starts_with("working_bytes=35816 "), "{stdout}");
     let (ok, stdout, _) = budget(&["--width", "640", "--height", "480", "--tile", "80x480"]);
     assert!(ok);
     assert!(stdout.ends_with(" overhead=1.2093\n"), "{stdout}");
@@ -64,6 +70,50 @@ fn bad_geometry_is_refused() {
         assert!(
             stderr.starts_with("reynoldsflow: error:"),
             "{args:?}: {stderr}"
+        );
+    }
+}
+
+/// Every row of README's "Memory and tiling" table is what `budget`
+/// prints for it (the table cannot drift from the engine's layout).
+#[test]
+fn the_readme_memory_table_is_what_budget_prints() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
+        .expect("README.md");
+    let start = readme
+        .find("## Memory and tiling")
+        .expect("README has a \"Memory and tiling\" section");
+    let section = &readme[start..];
+    let rows: Vec<Vec<&str>> = section
+        .lines()
+        .skip_while(|l| !l.starts_with("| frame |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
+        .collect();
+    assert!(rows.len() >= 10, "the table has {} rows", rows.len());
+    for row in rows {
+        let [frame, tile, bytes, overhead] = row[..] else {
+            panic!("a row of {} cells: {row:?}", row.len());
+        };
+        let (w, h) = frame.split_once('×').expect("W×H");
+        let tile = tile.replace('×', "x");
+        let (ok, stdout, stderr) = budget(&["--width", w, "--height", h, "--tile", &tile]);
+        assert!(ok, "{row:?}: {stderr}");
+        let bytes: String = bytes.chars().filter(|c| !c.is_whitespace()).collect();
+        let printed: f64 = stdout
+            .trim()
+            .rsplit_once("overhead=")
+            .and_then(|(_, o)| o.parse().ok())
+            .expect("an overhead");
+        assert!(
+            stdout.starts_with(&format!("working_bytes={bytes} ")),
+            "{row:?}: budget prints {stdout}"
+        );
+        assert_eq!(
+            format!("{printed:.3}"),
+            overhead,
+            "{row:?}: budget prints {stdout}"
         );
     }
 }

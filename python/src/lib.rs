@@ -101,7 +101,8 @@ fn represent<'py>(
 ///
 /// The curl-free field v_c, the divergence-free field v_d and their sum
 /// v_R as float32 (H, W, 2) arrays, last axis (x, y) in pixels (x right,
-/// y down), like OpenCV's flow.
+/// y down), like OpenCV's flow. With engine="fixed", v_c and v_d are the
+/// core's float32 values exactly; v_R is their float64 sum, rounded once.
 #[pyfunction]
 #[pyo3(signature = (prev, next, **options))]
 fn fields<'py>(
@@ -121,6 +122,7 @@ fn fields<'py>(
         ("v_d", &planes.vdx, &planes.vdy),
         ("v_R", &rx, &ry),
     ] {
+        // Exact for the core's v_c and v_d (f32 values in f64 planes).
         let xy: Vec<f32> = x
             .iter()
             .zip(y)

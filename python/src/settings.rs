@@ -121,7 +121,7 @@ fn parse_engine(name: &str) -> PyResult<EngineKind> {
         "fixed" => Ok(EngineKind::Fixed),
         "float" => Ok(EngineKind::Float),
         _ => Err(value_error(format!(
-            "engine = '{name}'; expected 'fixed' (the fixed-point core) or 'float' (the float64 reference)"
+            "engine = '{name}'; expected 'fixed' (the core, what embedded targets compute) or 'float' (the float64 reference)"
         ))),
     }
 }

@@ -285,6 +285,17 @@ fn worst_cases() -> Vec<Case> {
         h,
         (diagonal(50), diagonal(52)),
     ));
+    // Straight oblique edges at full contrast: the rank-one structure
+    // tensor at which a rounded 2×2 solve loses the most (its condition
+    // number is largest there), at three slopes.
+    for (name, a, b, e) in [
+        ("oblique step 1:2, moving 1 px", 1, 2, 64),
+        ("oblique step 2:3, moving 1 px", 2, 3, 120),
+        ("oblique step 1:3, moving 2 px", 1, 3, 80),
+    ] {
+        let edge = |e: usize| pattern(&move |x, y| a * x + b * y >= e);
+        out.push(case(name, w, h, (edge(e), edge(e + a + b))));
+    }
     out.push(case(
         "step appearing on black",
         w,

@@ -1,6 +1,6 @@
 //! Golden bytes: the fixed core's output on the shared vectors, committed in
-//! `tests/golden/`, so any change to the fixed-point arithmetic shows up as
-//! a reviewed diff (`SUMMARY.txt` names what changed). After a deliberate
+//! `tests/golden/`, so any change to the core's arithmetic shows up as a
+//! reviewed diff (`SUMMARY.txt` names what changed). After a deliberate
 //! change, regenerate with
 //! `REYNOLDSFLOW_BLESS=1 cargo test -p reynoldsflow-tests --test golden`:
 //! blessing also appends to `SUMMARY.txt`, below [`CHANGES`], how many
@@ -30,57 +30,91 @@ fn fnv(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The fields' raw bits: four i32 planes (Q16.16 `v_c` x, y, `v_d` x, y),
-/// then two u64 planes (Q32.32 `|v_c|`, `|v_d|`), little-endian.
+/// The fields' raw bits: six `f32` planes (`v_c` x, y, `v_d` x, y, `|v_c|`,
+/// `|v_d|`), little-endian.
 fn field_bytes(out: &FixedOutput) -> Vec<u8> {
-    let mut bytes = Vec::new();
-    for plane in [
+    let planes = [
         &out.planes.vcx,
         &out.planes.vcy,
         &out.planes.vdx,
         &out.planes.vdy,
-    ] {
-        // Exact: the planes hold Q16.16 values converted to f64.
-        bytes.extend(
-            plane
-                .iter()
-                .flat_map(|v| ((v * 65536.0) as i32).to_le_bytes()),
-        );
-    }
-    for plane in [&out.m_c, &out.m_d] {
-        bytes.extend(
-            plane
-                .iter()
-                .flat_map(|v| ((v * 4_294_967_296.0) as u64).to_le_bytes()),
-        );
-    }
-    bytes
+        &out.m_c,
+        &out.m_d,
+    ];
+    // Exact: the planes hold the core's `f32` values converted to f64.
+    planes
+        .into_iter()
+        .flat_map(|plane| plane.iter().flat_map(|&v| (v as f32).to_le_bytes()))
+        .collect()
 }
 
-/// Differing elements and the largest difference, reading both as
-/// little-endian integers of `width` bytes (1 for pixels).
-fn changes(old: &[u8], new: &[u8], width: usize) -> String {
+/// The values of a `fields.bin` of `pixels` pixels, in pixels: the six
+/// `f32` planes of [`field_bytes`], or the format before it (until the
+/// core's tail moved to `f32`: four Q16.16 `i32` planes, then two Q32.32
+/// `u64` planes), so that a blessing across the change can say by how much
+/// the values moved.
+fn field_values(bytes: &[u8], pixels: usize) -> Option<Vec<f64>> {
+    if bytes.len() == 24 * pixels {
+        let values = bytes.chunks_exact(4);
+        return Some(
+            values
+                .map(|c| f64::from(f32::from_le_bytes(c.try_into().unwrap())))
+                .collect(),
+        );
+    }
+    if bytes.len() != 32 * pixels {
+        return None;
+    }
+    let (q16, q32) = bytes.split_at(16 * pixels);
+    let fields = q16
+        .chunks_exact(4)
+        .map(|c| f64::from(i32::from_le_bytes(c.try_into().unwrap())) / 65536.0);
+    let magnitudes = q32
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().unwrap()) as f64 / 4_294_967_296.0);
+    Some(fields.chain(magnitudes).collect())
+}
+
+/// Differing pixel bytes and the largest difference.
+fn byte_changes(old: &[u8], new: &[u8]) -> String {
     if old.len() != new.len() {
         return format!("size {} -> {}", old.len(), new.len());
     }
-    let value = |c: &[u8]| -> i128 {
-        match width {
-            1 => i128::from(c[0]),
-            4 => i128::from(i32::from_le_bytes(c.try_into().unwrap())),
-            _ => i128::from(u64::from_le_bytes(c.try_into().unwrap())),
+    let diffs = old.iter().zip(new).map(|(a, b)| a.abs_diff(*b));
+    let (count, max) = diffs.fold((0, 0), |(n, m), d| (n + usize::from(d != 0), m.max(d)));
+    format!("{count} of {} differ, by at most {max}", old.len())
+}
+
+/// Differing field values (fields, then magnitudes) and the largest
+/// differences, absolute in pixels and relative to each plane's largest
+/// value.
+fn field_changes(old: &[f64], new: &[f64], pixels: usize) -> String {
+    let part = |range: core::ops::Range<usize>| {
+        let (old, new) = (&old[range.clone()], &new[range]);
+        let scale = old
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(f64::MIN_POSITIVE);
+        let (mut count, mut max) = (0usize, 0.0f64);
+        for (a, b) in old.iter().zip(new) {
+            count += usize::from(a != b);
+            max = max.max((a - b).abs());
         }
+        format!(
+            "{count} of {} differ, by at most {max:.3e} px ({:.1e} of the largest)",
+            old.len(),
+            max / scale
+        )
     };
-    let (mut count, mut max) = (0usize, 0i128);
-    for (a, b) in old.chunks(width).zip(new.chunks(width)) {
-        let diff = (value(a) - value(b)).abs();
-        count += usize::from(diff != 0);
-        max = max.max(diff);
-    }
-    format!("{count} of {} differ, by at most {max}", old.len() / width)
+    format!(
+        "field values: {}; magnitudes: {}",
+        part(0..4 * pixels),
+        part(4 * pixels..6 * pixels)
+    )
 }
 
 /// What blessing `bytes` changes in the golden output `name` at `path`.
-fn change_note(path: &std::path::Path, name: &str, bytes: &[u8], quads: usize) -> String {
+fn change_note(path: &std::path::Path, name: &str, bytes: &[u8], pixels: usize) -> String {
     let old = match name.ends_with(".png") {
         true => image_io::read_rgb8(path).map(|img| img.bytes).ok(),
         false => std::fs::read(path).ok(),
@@ -88,18 +122,12 @@ fn change_note(path: &std::path::Path, name: &str, bytes: &[u8], quads: usize) -
     let Some(old) = old else {
         return "new".into();
     };
-    match name.ends_with(".png") {
-        true => format!("bytes: {}", changes(&old, bytes, 1)),
-        // Four i32 planes of `quads` values, then two u64 planes.
-        false if old.len() == bytes.len() => {
-            let split = 4 * 4 * quads;
-            format!(
-                "Q16.16 field values: {}; Q32.32 magnitudes: {}",
-                changes(&old[..split], &bytes[..split], 4),
-                changes(&old[split..], &bytes[split..], 8)
-            )
-        }
-        false => changes(&old, bytes, 1),
+    if name.ends_with(".png") {
+        return format!("bytes: {}", byte_changes(&old, bytes));
+    }
+    match (field_values(&old, pixels), field_values(bytes, pixels)) {
+        (Some(old), Some(new)) => field_changes(&old, &new, pixels),
+        _ => byte_changes(&old, bytes),
     }
 }
 
@@ -164,10 +192,7 @@ fn fixed_core_output_equals_the_golden_bytes() {
     if bless {
         std::fs::write(&summary_path, format!("{summary}{notes}")).unwrap();
     }
-    assert!(
-        changed.is_empty(),
-        "fixed-point output changed: {changed:?}"
-    );
+    assert!(changed.is_empty(), "the core's output changed: {changed:?}");
     let committed = std::fs::read_to_string(&summary_path).unwrap();
     let checked = committed.split(CHANGES).next().unwrap_or_default();
     assert_eq!(checked, summary, "SUMMARY.txt is stale");

@@ -1,7 +1,7 @@
 //! One pass of the core's tiled engine per frame pair, into four sinks at
 //! once: the gray frame, the representation and the direction view as
 //! RGB565 panels, and the motion cues. Memory as on a small board: 64-px
-//! tiles (a 25 KiB engine) and a 9.9 KiB cue grid.
+//! tiles (a 19 KiB engine) and a 9.9 KiB cue grid.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{ByteScale, Config, Engine, FramePair, Params, Plan, PreviousFrameMinMax};
@@ -115,7 +115,7 @@ impl Analysis {
         let (scale_d, scale_c) = self.scales.scales();
         // Direction view: full brightness at the cue level and above, so
         // what the cues see stands out and the background still shows.
-        let cue_scale = ByteScale::min_max(U32F32::ZERO, self.cues.level());
+        let cue_scale = ByteScale::min_max(0.0, self.cues.level().to_num());
         let Panels {
             frame,
             representation,

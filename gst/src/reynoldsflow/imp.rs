@@ -1,6 +1,6 @@
 //! The element: a `BaseTransform` that keeps the previous frame's luma and,
 //! for every frame after the first, computes the pair through the host's
-//! [`PairPool`] (the fixed-point core, the CLI's parameters and checks,
+//! [`PairPool`] (the core, the CLI's parameters and checks,
 //! the frame spread over `threads` cores so no latency is added).
 //!
 //! Outputs are made in `generate_output`, so one input can give two
@@ -647,7 +647,8 @@ impl ReynoldsFlow {
                     unreachable!("built above")
                 };
                 // Whole rows in raster order: the cues are the same for any
-                // order the engine's tiles would have given (core `cues` doc).
+                // order the engine's tiles would have given (the cues crate's
+                // doc).
                 // The cues read the magnitudes only (`reads_fields` is false).
                 let (mut m_d, mut m_c, mut luma) = (Vec::new(), Vec::new(), Vec::new());
                 for (y, row) in pixels.pixels().chunks(width).enumerate() {

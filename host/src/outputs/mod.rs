@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use npyz::WriterBuilder;
 
+use crate::page_buffer::ByteBuffer;
 use crate::{FlowPlanes, HostError, atomic, image_io, viz};
 
 #[cfg(feature = "crash-injection")]
@@ -336,28 +337,35 @@ pub fn y4m_header(width: usize, height: usize, fps: (u32, u32)) -> String {
 /// `Cb = 128 + (−38R − 74G + 112B + 128) >> 8`,
 /// `Cr = 128 + (112R − 94G − 18B + 128) >> 8`.
 pub fn y4m_frame(rgb: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    y4m_frame_into(rgb, &mut out);
+    let mut out = vec![0; 6 + 3 * (rgb.len() / 3)];
+    y4m_frame_write(rgb, &mut out);
     out
 }
 
-/// [`y4m_frame`] into `out` (cleared first), reusing its memory.
-pub fn y4m_frame_into(rgb: &[u8], out: &mut Vec<u8>) {
+/// [`y4m_frame`] into `out` (its whole length), reusing its memory. Fails
+/// only when the system refuses the memory.
+pub fn y4m_frame_into(rgb: &[u8], out: &mut impl ByteBuffer) -> Result<(), HostError> {
+    y4m_frame_write(rgb, out.overwrite(6 + 3 * (rgb.len() / 3))?);
+    Ok(())
+}
+
+/// [`y4m_frame`] into `out`, exactly its length.
+fn y4m_frame_write(rgb: &[u8], out: &mut [u8]) {
     let n = rgb.len() / 3;
-    out.clear();
-    out.reserve(6 + 3 * n);
-    out.extend_from_slice(b"FRAME\n");
+    let (header, planes_out) = out.split_at_mut(6.min(out.len()));
+    header.copy_from_slice(b"FRAME\n");
     let planes: [fn(i32, i32, i32) -> i32; 3] = [
         |r, g, b| 16 + ((66 * r + 129 * g + 25 * b + 128) >> 8),
         |r, g, b| 128 + ((-38 * r - 74 * g + 112 * b + 128) >> 8),
         |r, g, b| 128 + ((112 * r - 94 * g - 18 * b + 128) >> 8),
     ];
-    for plane in planes {
-        out.extend(
-            rgb.chunks_exact(3).map(|p| {
-                plane(i32::from(p[0]), i32::from(p[1]), i32::from(p[2])).clamp(0, 255) as u8
-            }),
-        );
+    for (plane, out) in planes
+        .into_iter()
+        .zip(planes_out.chunks_exact_mut(n.max(1)))
+    {
+        for (o, p) in out.iter_mut().zip(rgb.chunks_exact(3)) {
+            *o = plane(i32::from(p[0]), i32::from(p[1]), i32::from(p[2])).clamp(0, 255) as u8;
+        }
     }
 }
 

@@ -10,8 +10,9 @@ computing, so threads compute in parallel.
 
 Options shared by the computing functions (all keyword-only):
 
-- ``engine``: ``"fixed"`` (the fixed-point core, what embedded targets
-  compute; default) or ``"float"`` (the float64 reference).
+- ``engine``: ``"fixed"`` (the core: integer stages and an IEEE float32
+  tail, bit for bit what embedded targets compute; default) or ``"float"``
+  (the float64 reference).
 - ``scale``: ``"minmax"`` (per-frame min-max; default), ``"fixed:KD,KC"``
   or ``(k_d, k_c)``: constant gains of |v_d| and |v_c| (the fixed engine
   rounds them to 1/65536).

@@ -50,7 +50,9 @@ def fields(
     """The curl-free field v_c, the divergence-free field v_d and their sum
     v_R = v_c + v_d, each a float32 (H, W, 2) array, last axis (x, y) in
     pixels (x right, y down), like OpenCV's flow: ``reynoldsflow pair``'s
-    .npy planes rounded to float32."""
+    float64 .npy planes rounded to float32. With engine="fixed", v_c and
+    v_d are the core's float32 values exactly (its planes hold them
+    unrounded); v_R is their float64 sum, rounded once."""
 
 def motion_score(
     prev: Frame,
