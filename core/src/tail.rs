@@ -104,32 +104,77 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
     sqrt(x * x + y * y) * k.units.v_c
 }
 
+impl TailRows<'_> {
+    /// The first `len` pixels of every row, or `None` when one is shorter.
+    #[inline(always)]
+    fn heads(&self, len: usize) -> Option<Self> {
+        let Self {
+            abc: [a, b, c],
+            pq: [p, q],
+            v: [vx, vy],
+        } = *self;
+        let (Some(a), Some(b), Some(c), Some(p), Some(q), Some(vx), Some(vy)) = (
+            a.get(..len),
+            b.get(..len),
+            c.get(..len),
+            p.get(..len),
+            q.get(..len),
+            vx.get(..len),
+            vy.get(..len),
+        ) else {
+            return None;
+        };
+        Some(Self {
+            abc: [a, b, c],
+            pq: [p, q],
+            v: [vx, vy],
+        })
+    }
+}
+
 /// The tail of every pixel of `out` (as many as the shortest row has).
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
-    let TailRows {
-        abc: [a, b, c],
-        pq: [p, q],
-        v: [vx, vy],
-    } = *rows;
     let TailOut {
         m: [m_d, m_c],
         fields,
     } = out;
+    // Every row cut to one length here, so the loops below index without
+    // bounds checks once inlined.
+    let len = m_d.len().min(m_c.len()).min(rows.abc[0].len());
+    let (Some(rows), Some(m_d), Some(m_c)) =
+        (rows.heads(len), m_d.get_mut(..len), m_c.get_mut(..len))
+    else {
+        return;
+    };
+    let TailRows {
+        abc: [a, b, c],
+        pq: [p, q],
+        v: [vx, vy],
+    } = rows;
     match fields {
         // Two loops, so that the magnitudes' loop writes nothing else.
         None => magnitudes_of(k, a, b, c, p, q, vx, vy, m_d, m_c),
         Some([v_c_x, v_c_y, v_d_x, v_d_y]) => {
+            let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
+                v_c_x.get_mut(..len),
+                v_c_y.get_mut(..len),
+                v_d_x.get_mut(..len),
+                v_d_y.get_mut(..len),
+            ) else {
+                return;
+            };
             let fields = [v_c_x, v_c_y, v_d_x, v_d_y];
             fields_of(k, a, b, c, p, q, vx, vy, m_d, m_c, fields);
         }
     }
 }
 
-/// The magnitudes of a row, every row a parameter of its own: so the
-/// compiler knows them apart once it inlines this (see `stages`), and
-/// takes the loop in vector lanes.
+/// The magnitudes of a row (every row as long as `m_d`, cut by
+/// [`tail_row`]), every row a parameter of its own: so the compiler knows
+/// them apart once it inlines this (see `stages`), and takes the loop in
+/// vector lanes.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn magnitudes_of(
@@ -144,22 +189,7 @@ fn magnitudes_of(
     m_d: &mut [f32],
     m_c: &mut [f32],
 ) {
-    let len = m_d.len().min(m_c.len()).min(a.len());
-    let (Some(a), Some(b), Some(c), Some(p), Some(q), Some(vx), Some(vy)) = (
-        a.get(..len),
-        b.get(..len),
-        c.get(..len),
-        p.get(..len),
-        q.get(..len),
-        vx.get(..len),
-        vy.get(..len),
-    ) else {
-        return;
-    };
-    let (Some(m_d), Some(m_c)) = (m_d.get_mut(..len), m_c.get_mut(..len)) else {
-        return;
-    };
-    for i in 0..len {
+    for i in 0..m_d.len() {
         let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
         m_d[i] = divergence_free_magnitude(&solved);
         m_c[i] = curl_free_magnitude(k, [vx[i] as f32, vy[i] as f32]);
@@ -182,30 +212,7 @@ fn fields_of(
     m_c: &mut [f32],
     [v_c_x, v_c_y, v_d_x, v_d_y]: [&mut [f32]; 4],
 ) {
-    let len = m_d.len().min(m_c.len()).min(a.len());
-    let (Some(a), Some(b), Some(c), Some(p), Some(q), Some(vx), Some(vy)) = (
-        a.get(..len),
-        b.get(..len),
-        c.get(..len),
-        p.get(..len),
-        q.get(..len),
-        vx.get(..len),
-        vy.get(..len),
-    ) else {
-        return;
-    };
-    let (Some(m_d), Some(m_c)) = (m_d.get_mut(..len), m_c.get_mut(..len)) else {
-        return;
-    };
-    let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
-        v_c_x.get_mut(..len),
-        v_c_y.get_mut(..len),
-        v_d_x.get_mut(..len),
-        v_d_y.get_mut(..len),
-    ) else {
-        return;
-    };
-    for i in 0..len {
+    for i in 0..m_d.len() {
         let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
         let v = [vx[i] as f32, vy[i] as f32];
         m_d[i] = divergence_free_magnitude(&solved);
