@@ -37,8 +37,7 @@ impl ByteBuffer for Vec<u8> {
 /// of them per worker.
 #[derive(Default)]
 pub struct PageBytes {
-    /// The mapping and where its aligned room starts.
-    map: Option<(MmapMut, usize)>,
+    buffer: PageBuffer,
     len: usize,
 }
 
@@ -51,15 +50,9 @@ impl PageBytes {
 
 impl ByteBuffer for PageBytes {
     fn overwrite(&mut self, len: usize) -> Result<&mut [u8], HostError> {
-        if self
-            .map
-            .as_ref()
-            .is_none_or(|(map, at)| map.len() - at < len)
-        {
-            self.map = Some(map_anonymous(len)?);
-        }
+        let bytes = self.buffer.bytes(len)?;
         self.len = len;
-        Ok(&mut *self)
+        Ok(bytes)
     }
 }
 
@@ -67,23 +60,20 @@ impl Deref for PageBytes {
     type Target = [u8];
 
     fn deref(&self) -> &[u8] {
-        self.map
-            .as_ref()
-            .map_or(&[], |(map, at)| &map[*at..*at + self.len])
+        self.buffer.room().get(..self.len).unwrap_or_default()
     }
 }
 
 impl DerefMut for PageBytes {
     fn deref_mut(&mut self) -> &mut [u8] {
         let len = self.len;
-        self.map
-            .as_mut()
-            .map_or(&mut [], |(map, at)| &mut map[*at..*at + len])
+        self.buffer.room_mut().get_mut(..len).unwrap_or_default()
     }
 }
 
-/// Zero-initialised memory of at least a given length, grown by remapping
-/// (the contents do not survive growth: every user overwrites them).
+/// Zero-initialised memory of at least a given length in one anonymous
+/// mapping, grown by remapping (the contents do not survive growth: every
+/// user overwrites them).
 #[derive(Default)]
 pub struct PageBuffer {
     /// The mapping and where its aligned room starts.
@@ -91,28 +81,43 @@ pub struct PageBuffer {
 }
 
 impl PageBuffer {
-    /// An empty buffer (no mapping until the first [`Self::floats`]).
+    /// An empty buffer (no mapping until the first [`Self::bytes`]).
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// At least `len` `f32`s (zero when fresh, else what was last written),
-    /// in one mapping. Fails only when the system refuses the memory.
-    pub fn floats(&mut self, len: usize) -> Result<&mut [f32], HostError> {
-        let bytes = len.checked_mul(size_of::<f32>()).ok_or_else(|| {
-            HostError::io("anonymous memory", std::io::ErrorKind::OutOfMemory.into())
-        })?;
-        if self
-            .map
-            .as_ref()
-            .is_none_or(|(map, at)| map.len() - at < bytes)
-        {
-            self.map = Some(map_anonymous(bytes)?);
+    /// The first `len` bytes (zero when fresh, else what was last written),
+    /// remapped when the room is shorter. Fails only when the system
+    /// refuses the memory.
+    pub fn bytes(&mut self, len: usize) -> Result<&mut [u8], HostError> {
+        if self.room().len() < len {
+            self.map = Some(map_anonymous(len)?);
         }
-        let (map, at) = self.map.as_mut().expect("mapped above");
-        // The room starts on a page, so it is aligned for `f32`.
-        Ok(bytemuck::cast_slice_mut(&mut map[*at..*at + bytes]))
+        Ok(&mut self.room_mut()[..len])
     }
+
+    /// At least `len` `f32`s, as [`Self::bytes`].
+    pub fn floats(&mut self, len: usize) -> Result<&mut [f32], HostError> {
+        let bytes = len.checked_mul(size_of::<f32>()).ok_or_else(refused)?;
+        // The room starts on a page, so it is aligned for `f32`.
+        Ok(bytemuck::cast_slice_mut(self.bytes(bytes)?))
+    }
+
+    /// The whole aligned room (empty before the first mapping).
+    fn room(&self) -> &[u8] {
+        self.map.as_ref().map_or(&[], |(map, at)| &map[*at..])
+    }
+
+    fn room_mut(&mut self) -> &mut [u8] {
+        self.map
+            .as_mut()
+            .map_or(&mut [], |(map, at)| &mut map[*at..])
+    }
+}
+
+/// The error of memory the system refuses.
+fn refused() -> HostError {
+    HostError::io("anonymous memory", std::io::ErrorKind::OutOfMemory.into())
 }
 
 /// 2 MiB: the huge page of x86-64 and aarch64 (4 KiB granules).
@@ -125,7 +130,6 @@ const HUGE_PAGE: usize = 2 << 20;
 /// huge page at most.) The part before the boundary is never touched, so
 /// it costs address space, not memory.
 fn map_anonymous(bytes: usize) -> Result<(MmapMut, usize), HostError> {
-    let refused = || HostError::io("anonymous memory", std::io::ErrorKind::OutOfMemory.into());
     let room = bytes
         .max(1)
         .checked_next_multiple_of(HUGE_PAGE)
