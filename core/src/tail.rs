@@ -104,80 +104,56 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
     sqrt(x * x + y * y) * k.units.v_c
 }
 
-impl TailRows<'_> {
-    /// The first `len` pixels of every row, or `None` when one is shorter.
-    #[inline(always)]
-    fn heads(&self, len: usize) -> Option<Self> {
-        let Self {
-            abc: [a, b, c],
-            pq: [p, q],
-            v: [vx, vy],
-        } = *self;
-        let (Some(a), Some(b), Some(c), Some(p), Some(q), Some(vx), Some(vy)) = (
-            a.get(..len),
-            b.get(..len),
-            c.get(..len),
-            p.get(..len),
-            q.get(..len),
-            vx.get(..len),
-            vy.get(..len),
-        ) else {
-            return None;
-        };
-        Some(Self {
-            abc: [a, b, c],
-            pq: [p, q],
-            v: [vx, vy],
-        })
-    }
-}
-
-/// The tail of every pixel of `out` (as many as the shortest row has).
+/// The tail of every pixel of `out`. Every row is as long as `m_d` (the
+/// engine's are); should one be shorter, nothing is written.
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
-    let TailOut {
-        m: [m_d, m_c],
-        fields,
-    } = out;
-    // Every row cut to one length here, so the loops below index without
-    // bounds checks once inlined.
-    let len = m_d.len().min(m_c.len()).min(rows.abc[0].len());
-    let (Some(rows), Some(m_d), Some(m_c)) =
-        (rows.heads(len), m_d.get_mut(..len), m_c.get_mut(..len))
-    else {
-        return;
-    };
     let TailRows {
         abc: [a, b, c],
         pq: [p, q],
         v: [vx, vy],
-    } = rows;
+    } = *rows;
+    let TailOut {
+        m: [m_d, m_c],
+        fields,
+    } = out;
     match fields {
-        // Two loops, so that the magnitudes' loop writes nothing else.
-        None => magnitudes_of(k, a, b, c, p, q, vx, vy, m_d, m_c),
-        Some([v_c_x, v_c_y, v_d_x, v_d_y]) => {
-            let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
-                v_c_x.get_mut(..len),
-                v_c_y.get_mut(..len),
-                v_d_x.get_mut(..len),
-                v_d_y.get_mut(..len),
-            ) else {
-                return;
-            };
-            let fields = [v_c_x, v_c_y, v_d_x, v_d_y];
-            fields_of(k, a, b, c, p, q, vx, vy, m_d, m_c, fields);
-        }
+        // Two instances, so that the magnitudes' loop writes nothing else.
+        None => pixels_of::<false>(
+            k,
+            a,
+            b,
+            c,
+            p,
+            q,
+            vx,
+            vy,
+            m_d,
+            m_c,
+            &mut [],
+            &mut [],
+            &mut [],
+            &mut [],
+        ),
+        Some([v_c_x, v_c_y, v_d_x, v_d_y]) => pixels_of::<true>(
+            k, a, b, c, p, q, vx, vy, m_d, m_c, v_c_x, v_c_y, v_d_x, v_d_y,
+        ),
     }
 }
 
-/// The magnitudes of a row (every row as long as `m_d`, cut by
-/// [`tail_row`]), every row a parameter of its own: so the compiler knows
-/// them apart once it inlines this (see `stages`), and takes the loop in
-/// vector lanes.
+/// The row loop: the magnitudes and, when `FIELDS`, the fields
+/// `[v_c x, v_c y, v_d x, v_d y]` (empty otherwise).
+///
+/// Every row is a reference parameter of its own (not an array of them),
+/// so the compiler knows them apart once it inlines this: no runtime alias
+/// checks, which would outnumber LLVM's limit and keep the loop scalar.
+/// And every row is cut to one length here, in the function that indexes
+/// it, so no index is bounds-checked on any target (`scripts/embedded-check`
+/// walks the call graph for panics).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn magnitudes_of(
+fn pixels_of<const FIELDS: bool>(
     k: &TailConstants,
     a: &[i32],
     b: &[i32],
@@ -188,39 +164,44 @@ fn magnitudes_of(
     vy: &[i32],
     m_d: &mut [f32],
     m_c: &mut [f32],
+    v_c_x: &mut [f32],
+    v_c_y: &mut [f32],
+    v_d_x: &mut [f32],
+    v_d_y: &mut [f32],
 ) {
-    for i in 0..m_d.len() {
-        let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
-        m_d[i] = divergence_free_magnitude(&solved);
-        m_c[i] = curl_free_magnitude(k, [vx[i] as f32, vy[i] as f32]);
-    }
-}
-
-/// [`magnitudes_of`] and the fields `[v_c x, v_c y, v_d x, v_d y]`.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn fields_of(
-    k: &TailConstants,
-    a: &[i32],
-    b: &[i32],
-    c: &[i32],
-    p: &[f32],
-    q: &[f32],
-    vx: &[i32],
-    vy: &[i32],
-    m_d: &mut [f32],
-    m_c: &mut [f32],
-    [v_c_x, v_c_y, v_d_x, v_d_y]: [&mut [f32]; 4],
-) {
-    for i in 0..m_d.len() {
+    let n = m_d.len();
+    let f = if FIELDS { n } else { 0 };
+    let (Some(a), Some(b), Some(c), Some(vx), Some(vy), Some(p), Some(q), Some(m_c)) = (
+        a.get(..n),
+        b.get(..n),
+        c.get(..n),
+        vx.get(..n),
+        vy.get(..n),
+        p.get(..n),
+        q.get(..n),
+        m_c.get_mut(..n),
+    ) else {
+        return;
+    };
+    let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
+        v_c_x.get_mut(..f),
+        v_c_y.get_mut(..f),
+        v_d_x.get_mut(..f),
+        v_d_y.get_mut(..f),
+    ) else {
+        return;
+    };
+    for i in 0..n {
         let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
         let v = [vx[i] as f32, vy[i] as f32];
         m_d[i] = divergence_free_magnitude(&solved);
         m_c[i] = curl_free_magnitude(k, v);
-        v_c_x[i] = v[0] * k.units.v_c;
-        v_c_y[i] = v[1] * k.units.v_c;
-        v_d_x[i] = solved.n[0] * solved.inv;
-        v_d_y[i] = solved.n[1] * solved.inv;
+        if FIELDS {
+            v_c_x[i] = v[0] * k.units.v_c;
+            v_c_y[i] = v[1] * k.units.v_c;
+            v_d_x[i] = solved.n[0] * solved.inv;
+            v_d_y[i] = solved.n[1] * solved.inv;
+        }
     }
 }
 
