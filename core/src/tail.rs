@@ -145,9 +145,11 @@ pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
 /// The row loop: the magnitudes and, when `FIELDS`, the fields
 /// `[v_c x, v_c y, v_d x, v_d y]` (empty otherwise).
 ///
-/// Every row is a reference parameter of its own (not an array of them),
-/// so the compiler knows them apart once it inlines this: no runtime alias
-/// checks, which would outnumber LLVM's limit and keep the loop scalar.
+/// Every row it writes is a `&mut` parameter of its own (in an array the
+/// compiler loses their `noalias`), so it knows them apart once it inlines
+/// this: no runtime alias checks, which would outnumber LLVM's limit and
+/// keep the loop scalar (0 `vsqrtps` on x86-64 when the rows came as
+/// arrays).
 /// And every row is cut to one length here, in the function that indexes
 /// it, so no index is bounds-checked on any target (`scripts/embedded-check`
 /// walks the call graph for panics).
