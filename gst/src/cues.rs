@@ -29,14 +29,20 @@ pub const MESSAGE_STRUCTURE: &str = "reynoldsflow-cues";
 
 /// What the cues look for: `|v_c|` (smooth, one compact blob per small
 /// mover; the `cues` module doc of `reynoldsflow-cues`) above `threshold`
-/// px, regions of at least `min_area` px.
-pub fn params(threshold: f64, min_area: u32) -> CueParams {
-    CueParams {
+/// px, regions of at least `min_area` px. NaN is refused, naming the
+/// property: GLib 2.74 and later refuse it at the property already, older
+/// ones clamp, which lets it through (and `fixed` panics on NaN).
+/// Thresholds beyond the magnitudes' Q32.32 saturate.
+pub fn params(threshold: f64, min_area: u32) -> Result<CueParams, String> {
+    if threshold.is_nan() {
+        return Err("cue-threshold is NaN; give a level in px, 0 or more".into());
+    }
+    Ok(CueParams {
         field: Field::CurlFree,
         threshold: Threshold::Absolute(U32F32::saturating_from_num(threshold)),
         min_area,
         smoothing: 0,
-    }
+    })
 }
 
 /// A cue sink for frames of `config`'s size, built on the heap.

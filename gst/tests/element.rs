@@ -382,7 +382,7 @@ fn core_regions(
     let mut sink = Box::new(
         MotionCues::<CELL, { grid_cells(W, CELL) }, { grid_cells(H, CELL) }, REGIONS>::new(
             &config,
-            cues::params(threshold, min_area),
+            cues::params(threshold, min_area).unwrap(),
         )
         .unwrap(),
     );
@@ -512,6 +512,21 @@ fn unsupported_caps_and_settings_are_refused_with_a_message() {
     );
     let text = error_text(&rig.1);
     assert!(text.contains("lambda"), "{text}");
+}
+
+#[test]
+fn a_nan_cue_threshold_is_refused_and_the_cues_cannot_see_one() {
+    // GLib (2.74 and later) refuses NaN for a double property and keeps the
+    // value it had; `cues::params` refuses it too, for the GLibs that clamp
+    // instead (every comparison with NaN is false, so it passes a clamp).
+    let rig = harness(&[("cue-threshold", "0.5")]);
+    let element = rig.element().unwrap();
+    let set = std::panic::catch_unwind(|| element.set_property("cue-threshold", f64::NAN));
+    assert!(set.is_err(), "glib-rs sets a NaN it should refuse");
+    assert_eq!(element.property::<f64>("cue-threshold"), 0.5);
+    let refused = cues::params(f64::NAN, 1).unwrap_err();
+    assert!(refused.contains("cue-threshold is NaN"), "{refused}");
+    assert!(cues::params(f64::INFINITY, 1).is_ok());
 }
 
 fn harness_with_bus(properties: &[(&str, &str)]) -> (Harness, gst::Bus) {

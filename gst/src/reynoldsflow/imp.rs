@@ -634,7 +634,8 @@ impl ReynoldsFlow {
                     // The grid depends on the frame size only.
                     let config = Config::new(width, height, Params::DEFAULT)
                         .map_err(|e| settings_error(e.to_string()))?;
-                    let params = cues::params(settings.cue_threshold, settings.cue_min_area);
+                    let params = cues::params(settings.cue_threshold, settings.cue_min_area)
+                        .map_err(settings_error)?;
                     let sink = cues::new_cues(&config, params).map_err(|e| {
                         settings_error(format!(
                             "cues: {e} (they cover frames up to {} px a side)",
