@@ -38,6 +38,24 @@ pub trait Sink {
 
     /// Pixels `[x, x + pixels.len())` of frame row `y`.
     fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>);
+
+    /// Rows of the sink's own memory for the magnitudes `[|v_d|, |v_c|]`
+    /// of pixels `[x, x + width)` of frame row `y`, each `width` long, or
+    /// `None` (the default): the engine writes them into its own rows and
+    /// hands them over in [`Sink::row`]. Asked only of sinks that do not
+    /// read the fields. A sink that keeps every magnitude (per-frame
+    /// min–max keeps the frame's before any byte) is spared a copy of each
+    /// row; the engine then calls [`Sink::kept_row`], not [`Sink::row`].
+    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
+        let _ = (y, x, width);
+        None
+    }
+
+    /// The magnitudes of pixels `[x, x + luma.len())` of frame row `y` are
+    /// in the rows [`Sink::magnitude_rows`] gave; `luma` is their `fⁿ`.
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
+        let _ = (y, x, luma);
+    }
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
@@ -49,6 +67,16 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
         (**self).row(y, x, pixels)
+    }
+
+    #[inline(always)]
+    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
+        (**self).magnitude_rows(y, x, width)
+    }
+
+    #[inline(always)]
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
+        (**self).kept_row(y, x, luma)
     }
 }
 
@@ -545,6 +573,23 @@ impl Pass<'_> {
             lambda4: config.lambda4,
             units: config.units(),
         };
+        // The row's place in the frame, worked out where each call needs it:
+        // held across the tail, it cost the M4 registers (445 → 451 per
+        // pixel at 320×240, `scripts/embedded-check`).
+        let at = || {
+            (
+                (y_first + o as isize) as usize,
+                (x_first + HALO as isize) as usize,
+            )
+        };
+        if !reads_fields {
+            let (y, x) = at();
+            if let Some(m) = sink.magnitude_rows(y, x, width) {
+                tail_row(&constants, &tail_rows, TailOut { m, fields: None });
+                sink.kept_row(y, x, first(from_first_output(rows.p0.row(o)), width));
+                return;
+            }
+        }
         tail_row(&constants, &tail_rows, out);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
@@ -557,10 +602,7 @@ impl Pass<'_> {
                 v_d: [v_d_x, v_d_y],
             }),
         };
-        let (y, x) = (
-            (y_first + o as isize) as usize,
-            (x_first + HALO as isize) as usize,
-        );
+        let (y, x) = at();
         sink.row(y, x, pixels);
     }
 }

@@ -351,12 +351,13 @@ impl FrameEngine {
     ) -> Result<(), HostError> {
         let (plan, frames) = prepare(prev, next, params, tile)?;
         let (width, height) = prev.size();
-        // Every byte is overwritten below; a reused buffer of the same size costs nothing.
-        let rgb = rgb.overwrite(3 * width * height)?;
         let engine = &mut self.engine.engine(&plan)?;
+        // Every byte is overwritten below; a reused buffer of the same size
+        // costs nothing. Min–max asks for it only once the pass is done.
+        let bytes = 3 * width * height;
         if !matches!(scaling, Scaling::PerFrameMinMax) {
             // Known gains: the core's `represent` streams rows into the bytes in one pass.
-            let pass = Pass::Represent(scaling, rgb);
+            let pass = Pass::Represent(scaling, rgb.overwrite(bytes)?);
             return Ok(dispatch::run(
                 self.isa,
                 engine,
@@ -376,6 +377,7 @@ impl FrameEngine {
         let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.extremes))?;
         let [m_d, m_c] = sink.planes;
         let kept = [&*m_d, &*m_c];
+        let rgb = rgb.overwrite(bytes)?;
         dispatch::kept_to_bytes(self.isa, kept, &prev.pixels, rgb, &[scale_d, scale_c]);
         Ok(())
     }
@@ -442,11 +444,21 @@ impl Kept {
 }
 
 /// The first step of per-frame min–max: each row's magnitudes into the
-/// kept planes, and the frame's extremes.
+/// kept planes (the engine's tail writes them there, [`Sink::magnitude_rows`]),
+/// and the frame's extremes.
 struct KeptMagnitudes<'a> {
     width: usize,
     planes: [&'a mut [f32]; 2],
     extremes: ExtremesSink,
+}
+
+impl KeptMagnitudes<'_> {
+    /// Where pixels `[x, x + len)` of frame row `y` are kept.
+    #[inline(always)]
+    fn range(&self, y: usize, x: usize, len: usize) -> std::ops::Range<usize> {
+        let start = y * self.width + x;
+        start..start + len
+    }
 }
 
 impl Sink for KeptMagnitudes<'_> {
@@ -456,13 +468,35 @@ impl Sink for KeptMagnitudes<'_> {
 
     #[inline(always)]
     fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
-        let start = y * self.width + x;
+        let range = self.range(y, x, pixels.len());
         for (plane, row) in self.planes.iter_mut().zip([pixels.m_d, pixels.m_c]) {
-            if let Some(kept) = plane.get_mut(start..start + row.len()) {
+            if let Some(kept) = plane.get_mut(range.clone()) {
                 kept.copy_from_slice(row);
             }
         }
         self.extremes.row(y, x, pixels);
+    }
+
+    #[inline(always)]
+    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
+        let range = self.range(y, x, width);
+        let [m_d, m_c] = &mut self.planes;
+        Some([m_d.get_mut(range.clone())?, m_c.get_mut(range)?])
+    }
+
+    #[inline(always)]
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
+        let range = self.range(y, x, luma.len());
+        let [m_d, m_c] = &self.planes;
+        if let (Some(m_d), Some(m_c)) = (m_d.get(range.clone()), m_c.get(range)) {
+            let pixels = Pixels {
+                m_d,
+                m_c,
+                luma,
+                fields: None,
+            };
+            self.extremes.row(y, x, pixels);
+        }
     }
 }
 

@@ -78,3 +78,87 @@ fn streamed_output_leaves_seven_rows_behind_the_input() {
         Err(reynoldsflow_core::Error::StreamFinished)
     );
 }
+
+/// A sink that keeps every magnitude in planes of its own, which the
+/// engine's tail writes directly (`Sink::magnitude_rows`), as per-frame
+/// min–max does on the host; rows it declines go through `Sink::row`.
+struct OwnRows {
+    width: usize,
+    m_d: Vec<f32>,
+    m_c: Vec<f32>,
+    luma: Vec<u8>,
+    /// Rows `magnitude_rows` declines (it takes the others).
+    decline: fn(usize) -> bool,
+    /// Rows announced through `kept_row`, and through `row`.
+    kept: usize,
+    handed: usize,
+}
+
+impl reynoldsflow_core::Sink for OwnRows {
+    fn reads_fields(&self) -> bool {
+        false
+    }
+
+    fn row(&mut self, y: usize, x: usize, pixels: reynoldsflow_core::Pixels<'_>) {
+        let at = y * self.width + x..y * self.width + x + pixels.len();
+        self.m_d[at.clone()].copy_from_slice(pixels.m_d);
+        self.m_c[at.clone()].copy_from_slice(pixels.m_c);
+        self.luma[at].copy_from_slice(pixels.luma);
+        self.handed += 1;
+    }
+
+    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
+        if (self.decline)(y) {
+            return None;
+        }
+        let at = y * self.width + x..y * self.width + x + width;
+        Some([&mut self.m_d[at.clone()], &mut self.m_c[at]])
+    }
+
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
+        let at = y * self.width + x..y * self.width + x + luma.len();
+        self.luma[at].copy_from_slice(luma);
+        self.kept += 1;
+    }
+}
+
+#[test]
+fn a_sink_keeping_magnitudes_in_its_own_rows_gets_the_same_values() {
+    let (w, h) = (37, 29);
+    let (prev, next) = frame_pair(Pattern::Smooth, w, h, 11);
+    let config = Config::new(w, h, Params::DEFAULT).unwrap();
+    let whole = whole_frame(&config, &prev, &next);
+    let frames = reynoldsflow_core::FramePair::packed(&config, &prev, &next).unwrap();
+    let odd_rows: fn(usize) -> bool = |y| y % 2 == 1;
+    for (tile, decline) in [
+        ((w, h), (|_| false) as fn(usize) -> bool),
+        ((9, 7), |_| false),
+        ((w, h), odd_rows),
+        ((4, 29), odd_rows),
+    ] {
+        let plan = reynoldsflow_core::Plan::new(config, tile.0, tile.1).unwrap();
+        let job = plan.bind(frames).unwrap();
+        let mut sink = OwnRows {
+            width: w,
+            m_d: vec![-1.0; w * h],
+            m_c: vec![-1.0; w * h],
+            luma: vec![0; w * h],
+            decline,
+            kept: 0,
+            handed: 0,
+        };
+        reynoldsflow_tests::engine().run(&job, &mut sink);
+        let what = format!("tile {tile:?}");
+        for (i, px) in whole.iter().enumerate() {
+            assert_eq!(sink.m_d[i].to_bits(), px.m_d.to_bits(), "{what}, pixel {i}");
+            assert_eq!(sink.m_c[i].to_bits(), px.m_c.to_bits(), "{what}, pixel {i}");
+            assert_eq!(sink.luma[i], px.luma, "{what}, pixel {i}");
+        }
+        // One call per row segment (a frame row per column of tiles), by
+        // whichever way the sink chose for its row.
+        let across = w.div_ceil(tile.0);
+        let declined = (0..h).filter(|&y| decline(y)).count();
+        assert_eq!(sink.handed, across * declined, "{what}");
+        assert_eq!(sink.kept, across * (h - declined), "{what}");
+    }
+}
