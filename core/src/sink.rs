@@ -153,8 +153,11 @@ pub fn rgb_batch<const N: usize>(
     for i in 0..N {
         (r[i], g[i]) = (scale_d.byte(m_d[i]), scale_c.byte(m_c[i]));
     }
-    for (i, out) in out.iter_mut().enumerate() {
-        *out = [r[i], g[i], luma[i]];
+    let out = out.as_flattened_mut();
+    for i in 0..N {
+        out[3 * i] = r[i];
+        out[3 * i + 1] = g[i];
+        out[3 * i + 2] = luma[i];
     }
 }
 
