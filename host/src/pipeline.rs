@@ -525,7 +525,7 @@ impl Worker<'_> {
             }
             #[cfg(test)]
             let _inside = self.compute.overlap.as_ref().map(|o| o.enter());
-            let msg = self.job_message(&job, buffers.payloads.take().unwrap_or_default());
+            let msg = self.job_message(&job, &buffers.payloads);
             // The last of the two jobs (and the reader) to use a frame hands it back.
             for frame in [job.prev, job.next] {
                 if let Some(frame) = Arc::into_inner(frame) {
@@ -539,16 +539,20 @@ impl Worker<'_> {
     }
 
     /// One pair's result, a panic included: it must not leave the others
-    /// waiting for this pair.
-    fn job_message(&mut self, job: &Job, payload: PageBytes) -> Msg {
-        let result =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.work(job, payload)))
-                .unwrap_or_else(|_| {
-                    Err(HostError::invalid(
-                        format!("frame {}", job.prev.stem),
-                        "internal error (panic) while computing this pair",
-                    ))
-                });
+    /// waiting for this pair. Its payload is drawn from `payloads` only when
+    /// its bytes are written ([`PooledBytes`]).
+    fn job_message(&mut self, job: &Job, payloads: &Pool<PageBytes>) -> Msg {
+        let mut payload = PooledBytes::new(payloads);
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            self.work(job, &mut payload)
+        }))
+        .map(|done| done.map(|()| payload.into_inner()))
+        .unwrap_or_else(|_| {
+            Err(HostError::invalid(
+                format!("frame {}", job.prev.stem),
+                "internal error (panic) while computing this pair",
+            ))
+        });
         match result {
             Ok(payload) => Msg::Done {
                 index: job.index,
@@ -561,42 +565,37 @@ impl Worker<'_> {
     }
 
     /// Compute one pair, then write its files or encode its stream frame
-    /// into `payload` (a used buffer, overwritten), which is returned.
-    fn work(&mut self, job: &Job, mut payload: PageBytes) -> Result<PageBytes, HostError> {
+    /// into `payload`.
+    fn work(&mut self, job: &Job, payload: &mut PooledBytes<'_>) -> Result<(), HostError> {
         let (prev, next) = (&job.prev.gray, &job.next.gray);
         if self.needs_fields {
             let fields = self.compute.pair_with(&mut self.engine, prev, next)?;
             if let Some(dir) = self.dir {
                 dir.write(&job.prev.stem, &fields)?;
             }
-            match self.stream {
+            return match self.stream {
                 Some((spec, StreamFormat::Rgb24)) => {
                     let image = spec.image(&fields);
                     payload.overwrite(image.len())?.copy_from_slice(&image);
+                    Ok(())
                 }
-                Some((spec, StreamFormat::Y4m)) => {
-                    y4m_frame_into(&spec.image(&fields), &mut payload)?
-                }
-                None => {
-                    payload.overwrite(0)?;
-                }
-            }
-            return Ok(payload);
+                Some((spec, StreamFormat::Y4m)) => y4m_frame_into(&spec.image(&fields), payload),
+                None => Ok(()),
+            };
         }
         // Raw RGB goes out as computed; Y4M and files are made from the image.
         let spec = self.dir.map_or_else(
             || self.stream.expect("a folder or a stream").0,
             DirWriter::spec,
         );
+        let engine = &mut self.engine;
         let image: &mut [u8] = match self.stream {
             Some((_, StreamFormat::Rgb24)) => {
-                self.compute
-                    .representation(&mut self.engine, prev, next, &mut payload)?;
-                &mut payload
+                (self.compute).representation(engine, prev, next, payload)?;
+                payload.bytes()
             }
             _ => {
-                self.compute
-                    .representation(&mut self.engine, prev, next, &mut self.rgb)?;
+                (self.compute).representation(engine, prev, next, &mut self.rgb)?;
                 &mut self.rgb
             }
         };
@@ -604,14 +603,45 @@ impl Worker<'_> {
         if let Some(dir) = self.dir {
             dir.write_image(&job.prev.stem, prev.width, prev.height, image)?;
         }
-        match self.stream {
-            Some((_, StreamFormat::Rgb24)) => {}
-            Some((_, StreamFormat::Y4m)) => y4m_frame_into(&self.rgb, &mut payload)?,
-            None => {
-                payload.overwrite(0)?;
-            }
+        if let Some((_, StreamFormat::Y4m)) = self.stream {
+            y4m_frame_into(&self.rgb, payload)?;
         }
-        Ok(payload)
+        Ok(())
+    }
+}
+
+/// A result's stream bytes, drawn from the run's pool of used buffers only
+/// when they are first written: per-frame min–max writes its bytes after
+/// the engine pass, when the collector has handed back the buffer of an
+/// earlier result, so a run keeps fewer buffers (each one's first touch is
+/// a page fault per 2 MiB; at 1280×720 with two workers, 4 payloads were
+/// made where 2–3 now are).
+struct PooledBytes<'a> {
+    pool: &'a Pool<PageBytes>,
+    bytes: Option<PageBytes>,
+}
+
+impl<'a> PooledBytes<'a> {
+    fn new(pool: &'a Pool<PageBytes>) -> Self {
+        Self { pool, bytes: None }
+    }
+
+    /// What was written (nothing: an empty buffer, which allocates nothing).
+    fn bytes(&mut self) -> &mut [u8] {
+        self.bytes.as_deref_mut().unwrap_or_default()
+    }
+
+    fn into_inner(self) -> PageBytes {
+        self.bytes.unwrap_or_default()
+    }
+}
+
+impl ByteBuffer for PooledBytes<'_> {
+    fn overwrite(&mut self, len: usize) -> Result<&mut [u8], HostError> {
+        let pool = self.pool;
+        self.bytes
+            .get_or_insert_with(|| pool.take().unwrap_or_default())
+            .overwrite(len)
     }
 }
 
@@ -905,6 +935,26 @@ mod tests {
             overlap.met(),
             "no two workers were ever inside a job at once"
         );
+    }
+
+    /// A payload is drawn from the pool only when its bytes are written,
+    /// so a buffer handed back meanwhile is the one reused.
+    #[test]
+    fn a_payload_is_taken_from_the_pool_when_first_written() {
+        let pool = Pool::new();
+        let mut used = PageBytes::new();
+        used.overwrite(5).unwrap().copy_from_slice(b"first");
+        let mut payload = PooledBytes::new(&pool);
+        pool.put(used);
+        assert!(payload.bytes().is_empty());
+        assert!(pool.0.lock().unwrap().len() == 1, "taken before any byte");
+        payload.overwrite(3).unwrap().copy_from_slice(b"abc");
+        assert!(pool.take().is_none(), "a new buffer made beside a free one");
+        assert_eq!(&*payload.into_inner(), b"abc");
+        // Never written: an empty buffer, nothing taken.
+        pool.put(PageBytes::new());
+        assert!(PooledBytes::new(&pool).into_inner().is_empty());
+        assert!(pool.take().is_some());
     }
 
     #[test]

@@ -282,8 +282,7 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
     let mut tick = || progress.inc();
 
     let (summary, place) = if to_stdout {
-        let stdout = io::stdout();
-        let mut writer: Box<dyn Write + Send> = Box::new(io::BufWriter::new(stdout));
+        let mut writer = stream_writer();
         let dest = Destination::Stream {
             spec: &spec,
             format: args.format.unwrap_or_default(),
@@ -319,6 +318,18 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
         );
     }
     Ok(())
+}
+
+/// Standard output for the stream: its file descriptor written directly
+/// where it can be duplicated. `io::Stdout` is line-buffered, so each
+/// frame went out as two writes, split at its last `\n` byte, after a
+/// search of the whole frame for it.
+fn stream_writer() -> Box<dyn Write + Send> {
+    use std::os::fd::AsFd;
+    match io::stdout().as_fd().try_clone_to_owned() {
+        Ok(fd) => Box::new(io::BufWriter::new(std::fs::File::from(fd))),
+        Err(_) => Box::new(io::BufWriter::new(io::stdout())),
+    }
 }
 
 fn report(
