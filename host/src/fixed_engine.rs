@@ -367,19 +367,15 @@ impl FrameEngine {
                 &mut (),
             )?);
         }
-        let planes = self.kept.planes(width * height)?;
-        let mut sink = KeptMagnitudes {
-            width,
-            planes,
-            extremes: ExtremesSink::default(),
-        };
+        let mut sink = KeptMagnitudes::new(width, self.kept.planes(width * height)?);
         dispatch::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
-        let (scale_d, scale_c) = scaling.byte_scales(|| Ok::<_, HostError>(sink.extremes))?;
-        let [m_d, m_c] = sink.planes;
-        let kept = [&*m_d, &*m_c];
-        let rgb = rgb.overwrite(bytes)?;
-        dispatch::kept_to_bytes(self.isa, kept, &prev.pixels, rgb, &[scale_d, scale_c]);
-        Ok(())
+        sink.into_bytes(self.isa, &prev.pixels, rgb)
+    }
+
+    /// The engine memory, the compilation and the kept planes, for a pair
+    /// whose tiles several workers compute ([`crate::shared_pair`]).
+    pub(crate) fn parts(&mut self) -> (&mut HostEngine, Isa, &mut Kept) {
+        (&mut self.engine, self.isa, &mut self.kept)
     }
 }
 
@@ -429,14 +425,14 @@ pub(crate) fn bytes_from_kept(
 /// magnitudes of every pixel, each in its own plane (so that the byte step
 /// reads them in lanes), in a [`PageBuffer`] (7.4 MB at 1280×720).
 #[derive(Default)]
-struct Kept {
+pub(crate) struct Kept {
     buffer: PageBuffer,
 }
 
 impl Kept {
     /// The planes `[|v_d|, |v_c|]` of `pixels` each (the memory grows,
     /// never shrinks: every value is overwritten).
-    fn planes(&mut self, pixels: usize) -> Result<[&mut [f32]; 2], HostError> {
+    pub(crate) fn planes(&mut self, pixels: usize) -> Result<[&mut [f32]; 2], HostError> {
         let floats = self.buffer.floats(2 * pixels)?;
         let (m_d, m_c) = floats.split_at_mut(pixels);
         Ok([m_d, m_c])
@@ -446,13 +442,39 @@ impl Kept {
 /// The first step of per-frame min–max: each row's magnitudes into the
 /// kept planes (the engine's tail writes them there, [`Sink::magnitude_rows`]),
 /// and the frame's extremes.
-struct KeptMagnitudes<'a> {
+pub(crate) struct KeptMagnitudes<'a> {
     width: usize,
-    planes: [&'a mut [f32]; 2],
-    extremes: ExtremesSink,
+    /// Whole-frame planes `[|v_d|, |v_c|]`, row-major.
+    pub(crate) planes: [&'a mut [f32]; 2],
+    /// Of every pixel received so far.
+    pub(crate) extremes: ExtremesSink,
 }
 
-impl KeptMagnitudes<'_> {
+impl<'a> KeptMagnitudes<'a> {
+    /// Nothing received yet into `planes`, each `width` wide.
+    pub(crate) fn new(width: usize, planes: [&'a mut [f32]; 2]) -> Self {
+        Self {
+            width,
+            planes,
+            extremes: ExtremesSink::default(),
+        }
+    }
+
+    /// The second step, once every pixel is kept: the frame's scales from
+    /// the extremes, then the bytes (`luma`: `fⁿ`) into `rgb`.
+    pub(crate) fn into_bytes(
+        self,
+        isa: Isa,
+        luma: &[u8],
+        rgb: &mut impl ByteBuffer,
+    ) -> Result<(), HostError> {
+        let (scale_d, scale_c) = self.extremes.byte_scales();
+        let [m_d, m_c] = self.planes;
+        let rgb = rgb.overwrite(3 * luma.len())?;
+        dispatch::kept_to_bytes(isa, [m_d, m_c], luma, rgb, &[scale_d, scale_c]);
+        Ok(())
+    }
+
     /// Where pixels `[x, x + len)` of frame row `y` are kept.
     #[inline(always)]
     fn range(&self, y: usize, x: usize, len: usize) -> std::ops::Range<usize> {

@@ -33,6 +33,7 @@ pub mod pair_pool;
 pub mod pipeline;
 pub mod reference;
 pub mod sequence;
+mod shared_pair;
 pub mod viz;
 pub mod workers;
 

@@ -30,6 +30,7 @@ use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame_
 use crate::page_buffer::{ByteBuffer, PageBytes};
 use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
+use crate::shared_pair::{Desk, SharedPair};
 use crate::{Gray, HostError};
 
 /// Set when the user asks the process to stop (Ctrl-C): no new pair is
@@ -131,6 +132,27 @@ impl Compute {
                     rep: out.rep,
                 })
             }
+        }
+    }
+
+    /// [`Self::representation`] of `job`; one of a run's last pairs (which
+    /// `desk` shares) has its tiles open to idle workers when the fixed
+    /// engine keeps magnitudes, in per-frame min–max ([`crate::shared_pair`]).
+    fn job_representation(
+        &self,
+        engine: &mut FrameEngine,
+        job: &Job,
+        desk: Option<&Desk>,
+        rgb: &mut impl ByteBuffer,
+    ) -> Result<(), HostError> {
+        match (self.fixed, desk) {
+            (Some((params, Scaling::PerFrameMinMax)), Some(desk)) if desk.shares(job.index) => {
+                let tile = self.tile.map(|t| (t.width, t.height));
+                let (prev, next) = (Arc::clone(&job.prev), Arc::clone(&job.next));
+                let pair = SharedPair::new(prev, next, params, tile).map_err(tile_error)?;
+                desk.represent(pair, engine, rgb).map_err(tile_error)
+            }
+            _ => self.representation(engine, &job.prev.gray, &job.next.gray, rgb),
         }
     }
 
@@ -388,19 +410,26 @@ pub fn process(
         payloads: Pool::new(),
     };
     let buffers = &buffers;
+    // With one worker there is nobody to share a pair with.
+    let desk = (threads > 1).then(|| Desk::new(threads));
+    let desk = desk.as_ref();
 
     std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
         let stop = &stop;
         scope.spawn(move || {
+            let links = ReaderLinks {
+                jobs: job_tx,
+                tokens: token_rx,
+                msgs: reader_tx,
+            };
             read_pairs(
                 source,
                 options.max_frames,
-                job_tx,
-                token_rx,
-                reader_tx,
+                links,
                 stop,
                 &buffers.frames,
+                desk,
             )
         });
         for _ in 0..threads {
@@ -412,6 +441,7 @@ pub fn process(
                 stream: stream_spec,
                 engine: FrameEngine::new(),
                 rgb: Vec::new(),
+                desk,
             };
             scope.spawn(move || worker.take_jobs(job_rx, &msg_tx, stop, buffers));
         }
@@ -433,16 +463,24 @@ pub fn process(
     })
 }
 
-/// The reader: frames in, pairs out, one token per pair in flight.
-fn read_pairs(
-    source: &mut dyn FrameSource,
-    max_frames: Option<usize>,
+/// The reader's channels: pairs out, tokens in, messages to the collector.
+struct ReaderLinks {
     jobs: SyncSender<Job>,
     tokens: Receiver<()>,
     msgs: Sender<Msg>,
+}
+
+/// The reader: frames in, pairs out, one token per pair in flight; tells
+/// `desk` where the input ends.
+fn read_pairs(
+    source: &mut dyn FrameSource,
+    max_frames: Option<usize>,
+    links: ReaderLinks,
     stop: &AtomicBool,
     pool: &Pool<Frame>,
+    desk: Option<&Desk>,
 ) {
+    let ReaderLinks { jobs, tokens, msgs } = links;
     let mut prev: Option<Arc<Frame>> = None;
     let mut frames = 0;
     loop {
@@ -481,6 +519,9 @@ fn read_pairs(
             }
         }
     }
+    if let Some(desk) = desk {
+        desk.end_input(frames);
+    }
     let _ = msgs.send(Msg::End {
         frames,
         last_stem: prev.as_ref().map(|f| f.stem.clone()),
@@ -500,6 +541,8 @@ struct Worker<'a> {
     engine: FrameEngine,
     /// The `--variant` image of the pair (when it is not the payload itself).
     rgb: Vec<u8>,
+    /// Where the run's last pairs are shared (more than one worker).
+    desk: Option<&'a Desk>,
 }
 
 impl Worker<'_> {
@@ -518,6 +561,10 @@ impl Worker<'_> {
             // and keep every other worker waiting.
             let next = jobs.lock().expect("no worker panics holding it").recv();
             let Ok(job) = next else {
+                // No pair left: help finish one of the last.
+                if let Some(desk) = self.desk.filter(|_| !stop.load(Ordering::SeqCst)) {
+                    desk.help(&mut self.engine);
+                }
                 return;
             };
             if stop.load(Ordering::SeqCst) {
@@ -591,12 +638,12 @@ impl Worker<'_> {
         let image: &mut [u8] = match self.stream {
             Some((_, StreamFormat::Rgb24)) => {
                 self.compute
-                    .representation(&mut self.engine, prev, next, payload)?;
+                    .job_representation(&mut self.engine, job, self.desk, payload)?;
                 payload.bytes()
             }
             _ => {
                 self.compute
-                    .representation(&mut self.engine, prev, next, &mut self.rgb)?;
+                    .job_representation(&mut self.engine, job, self.desk, &mut self.rgb)?;
                 &mut self.rgb
             }
         };
