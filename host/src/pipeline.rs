@@ -7,7 +7,9 @@
 //! encode its stream frame); this thread puts stream frames out in order
 //! and counts. At most `2 · threads` pairs are in flight (read but not yet
 //! delivered), so memory stays bounded whatever the sequence's length, and
-//! the output is the same for every thread count.
+//! the output is the same for every thread count. The run's last pairs
+//! are computed tile by tile, so that a worker with no pair left helps
+//! finish them (`host/src/shared_pair.rs`).
 //!
 //! Only what the outputs need is computed: when no output needs the fields
 //! ([`OutputSpec::needs_fields`]), a worker computes the representation's
