@@ -144,11 +144,11 @@ impl Compute {
         &self,
         engine: &mut FrameEngine,
         job: &Job,
-        desk: Option<&Desk>,
+        desk: &Desk,
         rgb: &mut impl ByteBuffer,
     ) -> Result<(), HostError> {
-        match (self.fixed, desk) {
-            (Some((params, Scaling::PerFrameMinMax)), Some(desk)) if desk.shares(job.index) => {
+        match self.fixed {
+            Some((params, Scaling::PerFrameMinMax)) if desk.shares(job.index) => {
                 let tile = self.tile.map(|t| (t.width, t.height));
                 let (prev, next) = (Arc::clone(&job.prev), Arc::clone(&job.next));
                 let pair = SharedPair::new(prev, next, params, tile).map_err(tile_error)?;
@@ -412,9 +412,7 @@ pub fn process(
         payloads: Pool::new(),
     };
     let buffers = &buffers;
-    // With one worker there is nobody to share a pair with.
-    let desk = (threads > 1).then(|| Desk::new(threads));
-    let desk = desk.as_ref();
+    let desk = &Desk::new(threads);
 
     std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
@@ -480,7 +478,7 @@ fn read_pairs(
     links: ReaderLinks,
     stop: &AtomicBool,
     pool: &Pool<Frame>,
-    desk: Option<&Desk>,
+    desk: &Desk,
 ) {
     let ReaderLinks { jobs, tokens, msgs } = links;
     let mut prev: Option<Arc<Frame>> = None;
@@ -521,9 +519,7 @@ fn read_pairs(
             }
         }
     }
-    if let Some(desk) = desk {
-        desk.end_input(frames);
-    }
+    desk.end_input(frames);
     let _ = msgs.send(Msg::End {
         frames,
         last_stem: prev.as_ref().map(|f| f.stem.clone()),
@@ -543,8 +539,8 @@ struct Worker<'a> {
     engine: FrameEngine,
     /// The `--variant` image of the pair (when it is not the payload itself).
     rgb: Vec<u8>,
-    /// Where the run's last pairs are shared (more than one worker).
-    desk: Option<&'a Desk>,
+    /// Where the run's last pairs are shared.
+    desk: &'a Desk,
 }
 
 impl Worker<'_> {
@@ -564,8 +560,8 @@ impl Worker<'_> {
             let next = jobs.lock().expect("no worker panics holding it").recv();
             let Ok(job) = next else {
                 // No pair left: help finish one of the last.
-                if let Some(desk) = self.desk.filter(|_| !stop.load(Ordering::SeqCst)) {
-                    desk.help(&mut self.engine);
+                if !stop.load(Ordering::SeqCst) {
+                    self.desk.help(&mut self.engine);
                 }
                 return;
             };

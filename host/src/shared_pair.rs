@@ -24,8 +24,8 @@ use crate::fixed_engine::{FrameEngine, HostEngine, Kept, KeptMagnitudes, prepare
 use crate::page_buffer::ByteBuffer;
 use crate::sequence::Frame;
 
-/// Where a run's workers find pairs they can help with: set up when a run
-/// has more than one worker.
+/// Where a run's workers find pairs they can help with (with one worker,
+/// no pair is ever shared).
 pub(crate) struct Desk {
     workers: usize,
     /// Frames in the input, once the reader has found its end (0 before).
@@ -102,8 +102,8 @@ pub(crate) struct SharedPair {
     prev: Arc<Frame>,
     next: Arc<Frame>,
     params: Params,
-    /// Its tiles: `--tile`'s, else [`SHARED_BANDS`] bands.
-    tile: Option<(usize, usize)>,
+    /// Its tile size: `--tile`'s, else that of [`SHARED_BANDS`] bands.
+    tile: (usize, usize),
     /// Tiles of the pair's plan.
     tiles: usize,
     /// The next tile nobody has taken (past `tiles` once all are).
@@ -142,8 +142,8 @@ impl SharedPair {
     ) -> Result<Self, HostError> {
         let (width, height) = prev.gray.size();
         let band = height.div_ceil(SHARED_BANDS).max(MIN_BAND_ROWS);
-        let tile = tile.or(Some((strip_width(width), band)));
-        let (plan, _) = prepare(&prev.gray, &next.gray, params, tile)?;
+        let tile = tile.unwrap_or((strip_width(width), band));
+        let (plan, _) = prepare(&prev.gray, &next.gray, params, Some(tile))?;
         Ok(Self {
             tiles: plan.tile_count(),
             prev,
@@ -168,7 +168,7 @@ impl SharedPair {
         rgb: &mut impl ByteBuffer,
     ) -> Result<(), HostError> {
         let (prev, next) = (&self.prev.gray, &self.next.gray);
-        let (plan, frames) = prepare(prev, next, self.params, self.tile)?;
+        let (plan, frames) = prepare(prev, next, self.params, Some(self.tile))?;
         let width = prev.width;
         let (memory, isa, kept) = engine.parts();
         let mut sink = KeptMagnitudes::new(width, kept.planes(prev.pixels.len())?);
@@ -216,7 +216,7 @@ impl SharedPair {
         let mut tiles = Vec::new();
         let helped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             let (prev, next) = (&self.prev.gray, &self.next.gray);
-            let (plan, frames) = prepare(prev, next, self.params, self.tile)?;
+            let (plan, frames) = prepare(prev, next, self.params, Some(self.tile))?;
             let (memory, isa, kept) = engine.parts();
             let mut sink = KeptMagnitudes::new(prev.width, kept.planes(prev.pixels.len())?);
             self.take_tiles(memory, isa, &plan, &frames, &mut sink, &mut |t| {
@@ -366,6 +366,12 @@ mod tests {
         let desk = Desk::new(4);
         desk.end_input(2);
         assert!(desk.shares(0));
+        let desk = Desk::new(1);
+        desk.end_input(31);
+        assert!(
+            (0..30).all(|pair| !desk.shares(pair)),
+            "one worker shares nothing"
+        );
     }
 
     #[test]
