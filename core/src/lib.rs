@@ -103,4 +103,4 @@ pub use represent::{byte_scales, represent};
 pub use scale::{ByteScale, Extremes, PreviousFrameMinMax, Scaling};
 pub use schedule::HALO;
 pub use sink::{ExtremesSink, FieldPlanes, FieldSink, RGB_BATCH, RgbSink, rgb, rgb_batch, rgb_row};
-pub use stream::RowStream;
+pub use stream::{EngineHandle, RowStream};

@@ -10,7 +10,7 @@ use arbitrary::Arbitrary;
 use fixed::types::{U16F16, U32F32};
 use libfuzzer_sys::fuzz_target;
 use reynoldsflow_core::{
-    Arrays, Config, Engine, Error, ExtremesSink, FramePair, IntensityScale, MemorySize, Params,
+    Config, Engine, Error, ExtremesSink, FramePair, IntensityScale, MemorySize, Params,
     Plan, RgbSink, RowStream, Scaling, SliceEngine, represent,
 };
 
@@ -155,7 +155,7 @@ fuzz_target!(|case: Case| {
         row.resize(w + slack(y), 0xa5);
         row
     };
-    let mut stream_pass = |sink: &mut dyn FnMut(&mut RowStream<'_, Arrays<COLS>>, &[u8], &[u8])| {
+    let mut stream_pass = |sink: &mut dyn FnMut(&mut RowStream<&mut Engine<COLS>>, &[u8], &[u8])| {
         let (mut x, mut i) = (0, 0);
         while x < w {
             let sw = widths[i % widths.len()].min(w - x);
@@ -188,7 +188,7 @@ fuzz_target!(|case: Case| {
         .byte_scales(|| {
             let mut extremes = ExtremesSink::default();
             stream_pass(
-                &mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
+                &mut |s: &mut RowStream<&mut Engine<COLS>>, p: &[u8], n: &[u8]| {
                     s.push(p, n, &mut extremes).expect("whole rows")
                 },
             );
@@ -198,7 +198,7 @@ fuzz_target!(|case: Case| {
     let mut streamed = vec![0u8; 3 * w * h];
     let mut sink = RgbSink::new(&config, &mut streamed, scale_d, scale_c).expect("plane size");
     stream_pass(
-        &mut |s: &mut RowStream<'_, Arrays<COLS>>, p: &[u8], n: &[u8]| {
+        &mut |s: &mut RowStream<&mut Engine<COLS>>, p: &[u8], n: &[u8]| {
             s.push(p, n, &mut sink).expect("whole rows")
         },
     );

@@ -3,7 +3,7 @@
 //! into tiles or strips, and a full list keeps the strongest.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{Arrays, Config, Engine, FramePair, Params, Plan, RowStream, Sink};
+use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, RowStream, Sink};
 use reynoldsflow_cues::{CueParams, Field, FrameLevel, MotionCues, Region, Threshold};
 use reynoldsflow_demo::analysis::{Analysis, Cues, HEIGHT, MAX_CUES, WIDTH, cue_params};
 use reynoldsflow_demo::scene::{Lighting, PixelBox, Scene, static_frame};
@@ -113,7 +113,7 @@ fn streamed(
     let config = config();
     cue_sequence(frames, params, |pair, cues| {
         let mut x = 0;
-        let mut streams: Vec<RowStream<'_, Arrays<78>>> = engines
+        let mut streams: Vec<RowStream<&mut Engine<78>>> = engines
             .iter_mut()
             .zip(widths)
             .map(|(engine, &w)| {
