@@ -17,7 +17,9 @@
 #![deny(missing_docs)]
 
 pub mod atomic;
+pub mod captured;
 pub mod cli;
+pub mod compare;
 pub mod dispatch;
 mod error;
 pub mod eval;

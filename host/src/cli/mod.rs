@@ -18,6 +18,7 @@ pub mod run;
 pub mod shard;
 pub mod status;
 pub mod values;
+pub mod verify;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -32,7 +33,9 @@ Examples:
   reynoldsflow budget --width 640 --height 480 --tile 80x480
       working memory and halo overhead of an engine for that tiling
   reynoldsflow eval --out eval/
-      controlled scenes with exact ground truth, baselines, plots";
+      controlled scenes with exact ground truth, baselines, plots
+  reynoldsflow verify clip.y4m device.rgb --scale fixed:8,32
+      firmware CI: a device's output against run's, same input and flags; exit 0 only if identical";
 
 /// The examples of `pair`.
 const PAIR_EXAMPLES: &str = "\
@@ -72,6 +75,13 @@ pub enum Command {
     /// Horn-Schunck and Lucas-Kanade; a markdown report with plots.
     #[command(after_help = eval::EXAMPLES)]
     Eval(eval::EvalArgs),
+    /// A device's output against the representation recomputed from the
+    /// same input with the same flags (firmware CI).
+    ///
+    /// The capture is raw RGB24, Y4M or a folder of PNGs, as run writes
+    /// them; exit 0 only when identical (or within --tolerance).
+    #[command(after_help = verify::EXAMPLES)]
+    Verify(verify::VerifyArgs),
 }
 
 /// Parse `args` (program name first), run, and report.
@@ -90,6 +100,11 @@ where
         Command::Run(args) => run::run(args),
         Command::Dataset(args) => dataset::run(args),
         Command::Eval(args) => eval::run(args),
+        // Flag values refused before comparing are a bad command line (2), not a failed check (1).
+        Command::Verify(args) => match verify::prepare(args) {
+            Ok(plan) => verify::run(&plan),
+            Err(e) => return bad_command_line(&e.to_string()),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -126,7 +141,11 @@ fn usage_error(e: &clap::Error) -> ExitCode {
         })
         .collect();
     let message = parts.join(" ");
-    let message = message.strip_prefix("error: ").unwrap_or(&message);
+    bad_command_line(message.strip_prefix("error: ").unwrap_or(&message))
+}
+
+/// A malformed command line: one line, exit status 2.
+fn bad_command_line(message: &str) -> ExitCode {
     eprintln!("reynoldsflow: error: {message} (see --help)");
     ExitCode::from(2)
 }

@@ -2,7 +2,7 @@
 //! consecutive frame pair (SPEC §5), streamed, on all cores.
 
 use std::io::{self, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Once;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -14,7 +14,7 @@ use super::values::{self, EngineKind, ScaleArg, TileSize};
 use crate::HostError;
 use crate::outputs::{self, DirWriter, Fields, OutputSpec, StreamFormat, Variant};
 use crate::pipeline::{self, Compute, Destination, Options, Summary};
-use crate::sequence::{self, InputSpec};
+use crate::sequence::{self, FrameSource, InputSpec};
 
 /// Examples shown by `reynoldsflow run --help`.
 pub const EXAMPLES: &str = "\
@@ -181,9 +181,9 @@ pub struct RunArgs {
     /// or Y4M C444 for any Y4M reader or encoder.
     #[arg(long, value_enum)]
     pub format: Option<StreamFormat>,
-    /// INPUT holds raw 8-bit gray frames of this size, back to back.
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
-    pub raw: Option<(usize, usize)>,
+    /// How INPUT is read.
+    #[command(flatten)]
+    pub raw: RawInputArgs,
     /// The computation.
     #[command(flatten)]
     pub engine: EngineArgs,
@@ -193,6 +193,36 @@ pub struct RunArgs {
     /// Input limits.
     #[command(flatten)]
     pub limits: super::limits::LimitArgs,
+}
+
+/// `--raw` (shared by `run` and `verify`, which must read INPUT the same way).
+#[derive(Debug, clap::Args)]
+pub struct RawInputArgs {
+    /// INPUT holds raw 8-bit gray frames of this size, back to back.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub raw: Option<(usize, usize)>,
+}
+
+impl RawInputArgs {
+    /// What INPUT names: `None` is the built-in demo, `-` standard input.
+    pub fn input_spec(&self, input: Option<&Path>) -> Result<InputSpec, HostError> {
+        Ok(match input {
+            None => {
+                if self.raw.is_some() {
+                    return Err(HostError::invalid(
+                        "--raw",
+                        "needs INPUT (a file, or - for stdin)",
+                    ));
+                }
+                InputSpec::Demo
+            }
+            Some(p) if p.as_os_str() == "-" => InputSpec::Stdin { raw: self.raw },
+            Some(p) => InputSpec::Path {
+                path: p.to_owned(),
+                raw: self.raw,
+            },
+        })
+    }
 }
 
 fn parse_size(s: &str) -> Result<(usize, usize), String> {
@@ -233,7 +263,7 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
             "nothing left to write; add --viz, --npy or --flo",
         ));
     }
-    if to_stdout && (spec.viz || !spec.npy.is_empty() || !spec.flo.is_empty() || !spec.rep) {
+    if to_stdout && !spec.images_only() {
         return Err(HostError::invalid(
             "--out -",
             "a stream carries the --variant images only; --viz, --npy, --flo and --no-rep need an output folder",
@@ -251,34 +281,12 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
             "applies to --out - (a stream on stdout) only",
         ));
     }
-    let input = match &args.input {
-        None => {
-            if args.raw.is_some() {
-                return Err(HostError::invalid(
-                    "--raw",
-                    "needs INPUT (a file, or - for stdin)",
-                ));
-            }
-            InputSpec::Demo
-        }
-        Some(p) if p.as_os_str() == "-" => InputSpec::Stdin { raw: args.raw },
-        Some(p) => InputSpec::Path {
-            path: p.clone(),
-            raw: args.raw,
-        },
-    };
+    let input = args.raw.input_spec(args.input.as_deref())?;
     install_interrupt_handler();
     let started = Instant::now();
     let mut source = sequence::open(&input)?;
     let options = args.output.options(args.engine.threads());
-    let total = Progress::enabled()
-        .then(|| source.frame_count_hint())
-        .flatten()
-        .map(|n| {
-            let n = options.max_frames.map_or(n, |m| n.min(m));
-            (n + usize::from(options.keep_count)).saturating_sub(1) as u64
-        });
-    let progress = Progress::new(total, "results");
+    let progress = Progress::new(progress_total(&*source, &options), "results");
     let mut tick = || progress.inc();
 
     let (summary, place) = if to_stdout {
@@ -320,6 +328,18 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
     Ok(())
 }
 
+/// How many results a run of `source` delivers, when the source knows its
+/// length and a progress bar is shown (for the bar only).
+pub(super) fn progress_total(source: &dyn FrameSource, options: &Options) -> Option<u64> {
+    Progress::enabled()
+        .then(|| source.frame_count_hint())
+        .flatten()
+        .map(|n| {
+            let n = options.max_frames.map_or(n, |m| n.min(m));
+            (n + usize::from(options.keep_count)).saturating_sub(1) as u64
+        })
+}
+
 /// Standard output for the stream: its file descriptor written directly
 /// where it can be duplicated. `io::Stdout` is line-buffered, so each
 /// frame went out as two writes, split at its last `\n` byte, after a
@@ -353,10 +373,7 @@ fn report(
     let size = summary
         .size
         .map_or(String::new(), |(w, h)| format!(" of {w}x{h}"));
-    let engine = match compute.engine() {
-        EngineKind::Fixed => "fixed",
-        EngineKind::Float => "float",
-    };
+    let engine = compute.engine().name();
     if summary.results == 0 {
         eprintln!(
             "reynoldsflow: {name}: 1 frame{size}, so no result (a result needs a pair of frames); nothing written"

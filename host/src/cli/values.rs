@@ -12,6 +12,16 @@ pub enum EngineKind {
     Fixed,
 }
 
+impl EngineKind {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            EngineKind::Float => "float",
+            EngineKind::Fixed => "fixed",
+        }
+    }
+}
+
 /// `--scale`: how magnitudes become bytes (SPEC §4), gains as given.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ScaleArg {

@@ -165,6 +165,12 @@ impl OutputSpec {
         self.rep || self.viz || !self.npy.is_empty() || !self.flo.is_empty()
     }
 
+    /// Whether the `--variant` images are all that is written (what a
+    /// stream carries, and what `verify` compares).
+    pub fn images_only(&self) -> bool {
+        self.rep && !self.viz && self.npy.is_empty() && self.flo.is_empty()
+    }
+
     /// Whether the `--variant` image is made from the fields (the colour
     /// wheel) rather than from the representation's bytes alone.
     pub fn image_needs_fields(&self) -> bool {

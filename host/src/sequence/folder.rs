@@ -163,7 +163,7 @@ fn stem_of(path: &Path) -> &str {
 }
 
 /// Files directly in `dir` whose UTF-8 names pass `keep`, in natural order.
-fn list(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>, HostError> {
+pub(crate) fn list(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>, HostError> {
     let mut names = Vec::new();
     for entry in fs::read_dir(dir).map_err(|e| HostError::io(dir, e))? {
         let entry = entry.map_err(|e| HostError::io(dir, e))?;

@@ -65,6 +65,59 @@ pub trait FrameSource: Send {
     }
 }
 
+/// A source whose first frame has been read ahead, so its size is known
+/// before the sequence is run (`verify` must know it to read the captured
+/// stream); the frame is still the first one the source yields.
+pub struct Peeked {
+    first: Option<Frame>,
+    size: (usize, usize),
+    rest: Box<dyn FrameSource>,
+}
+
+impl Peeked {
+    /// Read the first frame of `source`; `None` when it has no frame at all.
+    pub fn new(mut source: Box<dyn FrameSource>) -> Result<Option<Self>, HostError> {
+        Ok(source.next_frame()?.map(|first| Self {
+            size: first.gray.size(),
+            first: Some(first),
+            rest: source,
+        }))
+    }
+
+    /// The frame size, from the first frame (every source holds the
+    /// frames after it to that size).
+    pub fn size(&self) -> (usize, usize) {
+        self.size
+    }
+}
+
+impl FrameSource for Peeked {
+    fn next_frame(&mut self) -> Result<Option<Frame>, HostError> {
+        match self.first.take() {
+            Some(first) => Ok(Some(first)),
+            None => self.rest.next_frame(),
+        }
+    }
+
+    fn next_frame_into(&mut self, frame: &mut Frame) -> Result<bool, HostError> {
+        match self.first.take() {
+            Some(first) => {
+                *frame = first;
+                Ok(true)
+            }
+            None => self.rest.next_frame_into(frame),
+        }
+    }
+
+    fn frame_count_hint(&self) -> Option<usize> {
+        self.rest.frame_count_hint()
+    }
+
+    fn frame_rate(&self) -> Option<(u32, u32)> {
+        self.rest.frame_rate()
+    }
+}
+
 /// The label of frame `index` of a video-like input: six digits at least,
 /// so the labels sort in frame order as plain strings.
 pub fn index_stem(index: usize) -> String {
@@ -225,7 +278,7 @@ fn is_image(head: &[u8]) -> bool {
 }
 
 /// The first bytes of a buffered reader, without consuming them.
-fn peek<R: io::BufRead>(reader: &mut R, name: &Path) -> Result<Vec<u8>, HostError> {
+pub(crate) fn peek<R: io::BufRead>(reader: &mut R, name: &Path) -> Result<Vec<u8>, HostError> {
     loop {
         match reader.fill_buf() {
             Ok(buf) => return Ok(buf[..buf.len().min(16)].to_vec()),

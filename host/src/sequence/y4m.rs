@@ -113,7 +113,7 @@ pub fn parse_header(line: &[u8]) -> Result<Header, String> {
 /// Read one `\n`-terminated line (without the newline). `Ok(None)` at a
 /// clean end of input; an error if the input ends inside the line or the
 /// line is longer than [`MAX_LINE`].
-fn read_line(reader: &mut dyn BufRead) -> Result<Option<Vec<u8>>, String> {
+pub(crate) fn read_line(reader: &mut dyn BufRead) -> Result<Option<Vec<u8>>, String> {
     let mut line = Vec::new();
     let n = reader
         .take(MAX_LINE as u64 + 1)
