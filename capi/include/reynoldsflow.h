@@ -28,6 +28,17 @@
 
 #include <stddef.h>
 #include <stdint.h>
+/**
+ * An upper bound of rf_workspace_size for tiles up to TILE_WIDTH px (with
+ * RF_FLAG_ROW_FIELDS in FLAGS or not), as a constant expression for a
+ * static array: 252 bytes per window column (TILE_WIDTH + 14), the row
+ * buffers (3 bytes a column, 19 with row fields) and RF_WORKSPACE_OVERHEAD
+ * for the handle. rf_init still checks the array's length.
+ */
+#define RF_WORKSPACE_BYTES(TILE_WIDTH, FLAGS) \
+  ((size_t)252 * ((size_t)(TILE_WIDTH) + 14) + \
+   (size_t)(((FLAGS) & RF_FLAG_ROW_FIELDS) ? 19 : 3) * (size_t)(TILE_WIDTH) + RF_WORKSPACE_OVERHEAD)
+
 
 /**
  * The ABI this header describes: changes whenever a struct's layout or a
@@ -65,6 +76,13 @@
  * Largest frame side the cues cover, px (the large grid's 128 cells).
  */
 #define RF_CUES_MAX_SIDE 2048
+
+/**
+ * Bytes of the handle's own part of a workspace, at most, on any target
+ * (with alignment slack and padding): what `RF_WORKSPACE_BYTES` adds to
+ * the engine's 252 bytes a window column.
+ */
+#define RF_WORKSPACE_OVERHEAD 512
 
 /**
  * Most output rows one `rf_stream_push` hands to its callback.

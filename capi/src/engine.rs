@@ -568,3 +568,45 @@ pub unsafe extern "C" fn rf_reset(engine: *mut rf_engine) -> rf_status {
     };
     ffi::status(reset())
 }
+
+/// Bytes of the handle's own part of a workspace, at most, on any target
+/// (with alignment slack and padding): what `RF_WORKSPACE_BYTES` adds to
+/// the engine's 252 bytes a window column.
+pub const RF_WORKSPACE_OVERHEAD: u32 = 512;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::RF_FLAG_ROW_FIELDS;
+
+    /// The header's `RF_WORKSPACE_BYTES(tile_width, flags)`, in Rust.
+    fn macro_bytes(tile_width: usize, flags: u32) -> usize {
+        let per_column = if flags & RF_FLAG_ROW_FIELDS != 0 {
+            19
+        } else {
+            3
+        };
+        252 * (tile_width + 14) + per_column * tile_width + RF_WORKSPACE_OVERHEAD as usize
+    }
+
+    #[test]
+    fn the_static_size_macro_bounds_the_workspace_query() {
+        assert!(
+            core::mem::size_of::<Instance>() + Carver::ALIGN + 32 <= RF_WORKSPACE_OVERHEAD as usize
+        );
+        for width in [1u32, 2, 17, 32, 160, 320, 641, 4096, 65535] {
+            for flags in [0, RF_FLAG_ROW_FIELDS] {
+                let mut config = rf_config::new(width, 8);
+                config.flags = flags;
+                let mut bytes = 0;
+                // SAFETY: valid pointers.
+                assert_eq!(unsafe { rf_workspace_size(&config, &mut bytes) }, RF_OK);
+                let bound = macro_bytes(width as usize, flags);
+                assert!(
+                    bytes <= bound && bound - bytes <= RF_WORKSPACE_OVERHEAD as usize,
+                    "{width} {flags}: {bytes} {bound}"
+                );
+            }
+        }
+    }
+}

@@ -63,8 +63,8 @@ pub use cues::{
     rf_cues_size, rf_region,
 };
 pub use engine::{
-    rf_attach_cues, rf_config_init, rf_engine, rf_init, rf_outputs, rf_represent,
-    rf_represent_rows, rf_reset, rf_workspace_size,
+    RF_WORKSPACE_OVERHEAD, rf_attach_cues, rf_config_init, rf_engine, rf_init, rf_outputs,
+    rf_represent, rf_represent_rows, rf_reset, rf_workspace_size,
 };
 pub use sinks::{rf_row, rf_row_fn};
 pub use status::{rf_status, rf_strerror};

@@ -431,9 +431,12 @@ impl<M: Memory> TileEngine<M> {
                 y_first,
                 t: 0,
             });
+            // The rows are carved once per window, not once per row: with
+            // memory of run-time width (`Slices`) carving is real work.
+            let mut pass = self.pass();
             for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
                 let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
-                self.push(config, prev, next, sink);
+                pass.push(config, prev, next, sink);
             }
         }
     }

@@ -319,6 +319,23 @@ static void statuses(void) {
   check_status(rf_workspace_size(&cfg, &bytes), RF_OK, "rf_workspace_size");
   check(bytes >= 252 * (w + 14) && bytes < 252 * (w + 14) + 2048, "workspace about 252 B a column",
         NULL);
+  for (uint32_t tw = 1; tw < 3000; tw += 37) {
+    for (uint32_t flags = 0; flags <= RF_FLAG_ROW_FIELDS; flags++) {
+      rf_config wide;
+      size_t need = 0;
+      rf_config_init(&wide, 3000, 2);
+      wide.tile_width = tw;
+      wide.flags = flags;
+      rf_workspace_size(&wide, &need);
+      check(need <= RF_WORKSPACE_BYTES(tw, flags) &&
+                RF_WORKSPACE_BYTES(tw, flags) - need <= RF_WORKSPACE_OVERHEAD,
+            "RF_WORKSPACE_BYTES bounds rf_workspace_size closely", NULL);
+    }
+  }
+  static uint8_t static_memory[RF_WORKSPACE_BYTES(64, 0)];
+  rf_engine *from_static = NULL;
+  check_status(rf_init(static_memory, sizeof static_memory, &cfg, &from_static), RF_OK,
+               "rf_init in a static array of RF_WORKSPACE_BYTES");
 
   struct {
     const char *what;
