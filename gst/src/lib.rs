@@ -2,7 +2,7 @@
 //! camera's frames (GRAY8, I420 or NV12; the luma plane) into the
 //! ReynoldsFlow representation (RGB, same size), one result per
 //! consecutive frame pair, computed by the core (`reynoldsflow-core`)
-//! exactly as `reynoldsflow run` computes it. See the README's GStreamer
+//! exactly as `reynoldsflow run` computes it. See docs/companion-board.md's GStreamer
 //! section.
 
 use gst::glib;

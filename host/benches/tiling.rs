@@ -1,4 +1,4 @@
-//! Throughput of the fixed engine per tile shape (README's tiling table):
+//! Throughput of the fixed engine per tile shape (the "Memory and tiling" table of docs/firmware.md):
 //! the full representation (`Fixed` gains, one pass) of a textured moving
 //! pair at 160×120, 320×240 and 640×480, one engine, one thread.
 //!

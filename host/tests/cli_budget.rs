@@ -74,15 +74,15 @@ fn bad_geometry_is_refused() {
     }
 }
 
-/// Every row of README's "Memory and tiling" table is what `budget`
-/// prints for it (the table cannot drift from the engine's layout).
+/// Every row of the firmware guide's "Memory and tiling" table is what
+/// `budget` prints for it (the table cannot drift from the engine's layout).
 #[test]
-fn the_readme_memory_table_is_what_budget_prints() {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
-        .expect("README.md");
+fn the_guides_memory_table_is_what_budget_prints() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/firmware.md"))
+        .expect("docs/firmware.md");
     let start = readme
         .find("## Memory and tiling")
-        .expect("README has a \"Memory and tiling\" section");
+        .expect("docs/firmware.md has a \"Memory and tiling\" section");
     let section = &readme[start..];
     let rows: Vec<Vec<&str>> = section
         .lines()

@@ -106,7 +106,7 @@ def test_quick_report_tables(quick):
 
 def test_readme_table_lists_the_inputs_the_command_produces():
     root = Path(os.environ["REYNOLDSFLOW_REPO"])
-    text = (root / "README.md").read_text()
+    text = (root / "docs" / "evaluation.md").read_text()
     section = text.split("## Downstream detection", 1)[1].split("\n## ", 1)[0]
     assert "python -m reynoldsflow.bench.downstream" in section
     header = report.main_table([], [], 0.5)[0]

@@ -137,7 +137,7 @@ def test_scaled_size_only_scales_down():
 
 def test_readme_panel_is_the_defaults_on_vtest(repo):
     """The committed panel (docs/downstream/footage.*) is the command at its
-    defaults on the clip scripts/fetch-vtest extracts, and the README shows
+    defaults on the clip scripts/fetch-vtest extracts, and docs/evaluation.md shows
     it with the commands that make it."""
     md = (repo / "docs" / "downstream" / "footage.md").read_text()
     assert "`python -m reynoldsflow.bench.footage --video target/footage/vtest.avi --out docs/downstream`" in md
@@ -152,7 +152,7 @@ def test_readme_panel_is_the_defaults_on_vtest(repo):
     want_w, want_h = footage.panel_size(footage.DEFAULT_PAIRS, w, h)
     assert abs(png.shape[1] - want_w) <= 1 and abs(png.shape[0] - want_h) <= 1
 
-    readme = " ".join((repo / "README.md").read_text().split())
+    readme = " ".join((repo / "docs" / "evaluation.md").read_text().split())
     assert "`scripts/fetch-vtest`" in readme and (repo / "scripts" / "fetch-vtest").is_file()
     assert "`python -m reynoldsflow.bench.footage --video target/footage/vtest.avi --out DIR`" in readme
-    assert "(docs/downstream/footage.png)" in readme
+    assert "(downstream/footage.png)" in readme

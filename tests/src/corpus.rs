@@ -11,7 +11,7 @@ use reynoldsflow_host::{Gray, image_io, npy};
 
 use crate::{Pattern, Rng, frame_pair, vector_cases, vectors_dir};
 
-/// A group of the corpus: one row of the README's accuracy table per
+/// A group of the corpus: one row of docs/accuracy.md's table per
 /// family and parameter set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Family {
@@ -36,7 +36,7 @@ impl Family {
         Family::Vectors,
     ];
 
-    /// The name the accuracy table prints (and the README's rows carry).
+    /// The name the accuracy table prints (and docs/accuracy.md's rows carry).
     pub fn name(self) -> &'static str {
         match self {
             Family::TinyMotions => "tiny motions",

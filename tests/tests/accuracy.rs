@@ -15,8 +15,9 @@
 //! PNGs).
 //!
 //! `cargo test -p reynoldsflow-tests --test accuracy -- --nocapture` prints,
-//! per family, every pair's figures, then the summary table that README's
-//! "## Accuracy (measured)" carries. The test holds the README to it: every
+//! per family, every pair's figures, then the summary table that
+//! docs/accuracy.md's "## Accuracy (measured)" carries (the README's
+//! "README" below). The test holds the guide to it: every
 //! README row must be a measured row and back, and each figure `f` in it
 //! must match the measured `m` by this rule:
 //! - error fractions and byte max differences: `m ∈ [f/2, 2f]`, and `m = 0`
@@ -414,11 +415,11 @@ fn summary_table(rows: &[Summary]) -> String {
 /// The README's accuracy section: its text and its table's rows as cells
 /// (header and separator dropped).
 fn readme_table() -> (String, Vec<Vec<String>>) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md");
-    let readme = std::fs::read_to_string(path).expect("README.md");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/accuracy.md");
+    let readme = std::fs::read_to_string(path).expect("docs/accuracy.md");
     let start = readme
         .find(README_HEADING)
-        .unwrap_or_else(|| panic!("README.md has no {README_HEADING:?} section"));
+        .unwrap_or_else(|| panic!("docs/accuracy.md has no {README_HEADING:?} section"));
     let body = &readme[start + README_HEADING.len()..];
     let section = &body[..body.find("\n## ").unwrap_or(body.len())];
     let rows = section

@@ -1,7 +1,7 @@
 //! How many motion cues a STATIC scene produces when only the light
 //! changes, for each threshold mode. Nothing moves, so every region is a
 //! false one. The figures are printed (`cargo test -p reynoldsflow-demo
-//! --test false_regions -- --nocapture`) and go in the README; the asserts
+//! --test false_regions -- --nocapture`) and go in docs/firmware.md; the asserts
 //! hold the claims made there.
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
@@ -176,7 +176,7 @@ fn false_regions_under_changing_light() {
     let table = print_table(Field::CurlFree, noise);
     println!("\nCells: false regions per frame (frames with any, of frames measured).");
 
-    // What the README claims, held here.
+    // What docs/firmware.md claims, held here.
     let all = FRAMES - 1 - SETTLE;
     for (light, lighting, row) in &table {
         let get = |name: &str| row.iter().find(|(n, _)| *n == name).unwrap().1;
