@@ -78,8 +78,9 @@ fn bad_geometry_is_refused() {
 /// `budget` prints for it (the table cannot drift from the engine's layout).
 #[test]
 fn the_guides_memory_table_is_what_budget_prints() {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/firmware.md"))
-        .expect("docs/firmware.md");
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/firmware.md"))
+            .expect("docs/firmware.md");
     let start = readme
         .find("## Memory and tiling")
         .expect("docs/firmware.md has a \"Memory and tiling\" section");

@@ -64,7 +64,8 @@ fn headings(text: &str) -> Vec<(usize, String)> {
         .lines()
         .filter_map(|l| {
             let level = l.chars().take_while(|&c| c == '#').count();
-            (level > 0 && l[level..].starts_with(' ')).then(|| (level, l[level..].trim().to_owned()))
+            (level > 0 && l[level..].starts_with(' '))
+                .then(|| (level, l[level..].trim().to_owned()))
         })
         .collect()
 }
@@ -90,7 +91,10 @@ fn every_link_resolves_to_a_file_or_a_heading() {
     for doc in documents() {
         let text = read(&doc);
         for link in links(&text) {
-            if link.starts_with("http://") || link.starts_with("https://") || link.starts_with("mailto:") {
+            if link.starts_with("http://")
+                || link.starts_with("https://")
+                || link.starts_with("mailto:")
+            {
                 continue;
             }
             checked += 1;
@@ -105,14 +109,19 @@ fn every_link_resolves_to_a_file_or_a_heading() {
                 continue;
             }
             if !anchor.is_empty() {
-                let found = headings(&read(&target)).iter().any(|(_, h)| slug(h) == anchor);
+                let found = headings(&read(&target))
+                    .iter()
+                    .any(|(_, h)| slug(h) == anchor);
                 if !found {
                     broken.push(format!("{}: {link}: no such heading", doc.display()));
                 }
             }
         }
     }
-    assert!(checked > 30, "only {checked} links found: the parser is off");
+    assert!(
+        checked > 30,
+        "only {checked} links found: the parser is off"
+    );
     assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
 }
 
@@ -140,7 +149,9 @@ fn the_docs_say_what_is_true_now() {
         for word in text.split(|c: char| !c.is_ascii_alphanumeric() && c != '.' && c != '-') {
             let hex = word.len() >= 7
                 && word.len() <= 40
-                && word.bytes().all(|b| b.is_ascii_hexdigit() && !b.is_ascii_uppercase())
+                && word
+                    .bytes()
+                    .all(|b| b.is_ascii_hexdigit() && !b.is_ascii_uppercase())
                 && word.bytes().any(|b| b.is_ascii_digit())
                 && word.bytes().any(|b| b.is_ascii_alphabetic() && b != b'e');
             if hex {
@@ -148,13 +159,20 @@ fn the_docs_say_what_is_true_now() {
             }
         }
     }
-    assert!(found.is_empty(), "history belongs in git:\n{}", found.join("\n"));
+    assert!(
+        found.is_empty(),
+        "history belongs in git:\n{}",
+        found.join("\n")
+    );
 }
 
 #[test]
 fn the_readme_is_a_five_minute_read() {
     let bytes = read(&repo().join("README.md")).len();
-    assert!(bytes <= 16_000, "README.md is {bytes} bytes; the guides in docs/ take the detail");
+    assert!(
+        bytes <= 16_000,
+        "README.md is {bytes} bytes; the guides in docs/ take the detail"
+    );
 }
 
 /// The section of `text` under the heading whose anchor is `anchor`, up to
@@ -192,12 +210,23 @@ fn the_readme_figures_are_the_guides() {
         let [what, value, command, guide] = row[..] else {
             panic!("a figure row of {} cells: {row:?}", row.len());
         };
-        assert!(command.starts_with('`') && command.ends_with('`'), "{what}: no command");
-        let link = links(guide).pop().unwrap_or_else(|| panic!("{what}: no guide link"));
-        let (file, anchor) = link.split_once('#').unwrap_or_else(|| panic!("{what}: {link} names no heading"));
+        assert!(
+            command.starts_with('`') && command.ends_with('`'),
+            "{what}: no command"
+        );
+        let link = links(guide)
+            .pop()
+            .unwrap_or_else(|| panic!("{what}: no guide link"));
+        let (file, anchor) = link
+            .split_once('#')
+            .unwrap_or_else(|| panic!("{what}: {link} names no heading"));
         let text = read(&repo().join(file));
-        let body = section(&text, anchor).unwrap_or_else(|| panic!("{what}: {file} has no #{anchor}"));
-        assert!(body.contains(value), "{what}: README says {value}, which {file}#{anchor} does not");
+        let body =
+            section(&text, anchor).unwrap_or_else(|| panic!("{what}: {file} has no #{anchor}"));
+        assert!(
+            body.contains(value),
+            "{what}: README says {value}, which {file}#{anchor} does not"
+        );
         let command = command.trim_matches('`');
         assert!(
             body.contains(command) || text.contains(command),
