@@ -9,6 +9,10 @@
 //! application helpers and their dependencies (`heapless`, `micromath`), so
 //! a major release of either never forces one of the core.
 //!
+//! Beside them, [`resample`]: the integer resize of gray frames that the
+//! host's `--resize` and `--short-side` apply before each pair, so a device
+//! that shrinks its sensor's frames gives the host's bytes.
+//!
 //! `no_std`, no alloc, no `unsafe`; memory fixed at compile time.
 //!
 //! ```
@@ -47,6 +51,7 @@ extern crate std;
 
 mod cues;
 mod display;
+pub mod resample;
 #[cfg(test)]
 mod test_rows;
 
