@@ -28,6 +28,16 @@ impl FlowPlanes {
         (add(&self.vcx, &self.vdx), add(&self.vcy, &self.vdy))
     }
 
+    /// The motion score of the pair: the mean of `|v_R| = |v_c + v_d|` over
+    /// the frame, in pixels per frame (0 for identical frames). What the
+    /// Python `motion_score` returns and WebDataset samples record.
+    pub fn mean_speed(&self) -> f64 {
+        let sum: f64 = (0..self.vcx.len())
+            .map(|i| (self.vcx[i] + self.vdx[i]).hypot(self.vcy[i] + self.vdy[i]))
+            .sum();
+        sum / self.vcx.len().max(1) as f64
+    }
+
     /// The magnitudes `(m_d, m_c) = (|v_d|, |v_c|)` (SPEC §3 step 11), in the
     /// order of the representation's R and G channels.
     pub fn magnitudes(&self) -> (Vec<f64>, Vec<f64>) {

@@ -164,6 +164,37 @@ pub fn encode_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, Ho
     Ok(png)
 }
 
+/// The bytes of a baseline JPEG (4:2:0, the `image` crate's encoder, so
+/// the same bytes on every target) of an RGB8 image at `quality` (1 to 100).
+///
+/// # Panics
+/// If `rgb.len() != 3 · width · height`.
+pub fn encode_jpeg(
+    width: usize,
+    height: usize,
+    rgb: &[u8],
+    quality: u8,
+) -> Result<Vec<u8>, HostError> {
+    assert_eq!(
+        rgb.len(),
+        3 * width * height,
+        "rgb must hold 3 · width · height bytes"
+    );
+    let too_large = || {
+        HostError::invalid(
+            "image",
+            format!("{width}x{height} is too large for JPEG (65535 a side)"),
+        )
+    };
+    let side = |n: usize| u16::try_from(n).map(u32::from).map_err(|_| too_large());
+    let (w, h) = (side(width)?, side(height)?);
+    let mut jpeg = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, quality.clamp(1, 100))
+        .write_image(rgb, w, h, ExtendedColorType::Rgb8)
+        .map_err(|e| HostError::invalid("image", format!("cannot encode JPEG: {e}")))?;
+    Ok(jpeg)
+}
+
 /// Write an RGB8 PNG atomically (see [`atomic`]).
 pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[u8]) -> Result<(), HostError> {
     atomic::write_file(path, &encode_png(width, height, rgb)?)

@@ -271,6 +271,14 @@ pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> Host
 pub enum Destination<'a> {
     /// Files in a folder.
     Dir(&'a DirWriter),
+    /// Samples, in order: each result's files (as `spec` makes them for a
+    /// folder) with its frames and motion score (`dataset --webdataset`).
+    Samples {
+        /// What each sample holds.
+        spec: &'a OutputSpec,
+        /// Where the samples go.
+        sink: &'a mut dyn SampleSink,
+    },
     /// The `--variant` images as a stream, in frame order.
     Stream {
         /// Which image.
@@ -291,6 +299,33 @@ pub struct Options {
     pub keep_count: bool,
     /// Read at most this many frames.
     pub max_frames: Option<usize>,
+    /// Name each result `PREV_NEXT` after both its frames' stems (frames
+    /// are picked by `--step` or `--fps`), not after the first alone.
+    pub pair_names: bool,
+    /// Keep the input index of every frame used ([`Summary::source_frames`]).
+    pub record_frames: bool,
+}
+
+/// One result as a sample: its files and what it came from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// `(path relative to an output folder, bytes)`, as
+    /// [`OutputSpec::files`] makes them.
+    pub files: Vec<(std::path::PathBuf, Vec<u8>)>,
+    /// The mean `|v_R|` of the pair ([`crate::FlowPlanes::mean_speed`]).
+    pub motion: f64,
+}
+
+/// Where [`Destination::Samples`] puts the samples, one call per result
+/// in result order (and the `--keep-count` repeat last).
+pub trait SampleSink {
+    /// The result named `stem`, of the input frames `frames` (indices).
+    fn sample(
+        &mut self,
+        stem: &str,
+        frames: (usize, usize),
+        sample: &Sample,
+    ) -> Result<(), HostError>;
 }
 
 /// What a run did.
@@ -307,6 +342,10 @@ pub struct Summary {
     /// The stream's reader closed it (broken pipe) before the end: the run
     /// stopped there, without error.
     pub stream_closed: bool,
+    /// The input index of every frame used, in order, with
+    /// [`Options::record_frames`]: result `i` came from frames
+    /// `source_frames[i]` and `source_frames[i + 1]`.
+    pub source_frames: Option<Vec<usize>>,
 }
 
 /// Buffers handed back after use, for the next pair to reuse: once it
@@ -341,6 +380,25 @@ struct Job {
     index: usize,
     prev: Arc<Frame>,
     next: Arc<Frame>,
+    /// Named after both frames ([`Options::pair_names`]).
+    pair_names: bool,
+}
+
+impl Job {
+    /// The name of its result.
+    fn stem(&self) -> std::borrow::Cow<'_, str> {
+        result_stem(&self.prev.stem, &self.next.stem, self.pair_names)
+    }
+}
+
+/// The name of the result of frames `prev` and `next`: `prev`, or
+/// `PREV_NEXT` with `pair_names`.
+fn result_stem<'a>(prev: &'a str, next: &str, pair_names: bool) -> std::borrow::Cow<'a, str> {
+    if pair_names {
+        format!("{prev}_{next}").into()
+    } else {
+        prev.into()
+    }
 }
 
 enum Msg {
@@ -349,6 +407,10 @@ enum Msg {
         stem: String,
         size: (usize, usize),
         payload: PageBytes,
+        /// The input indices of its two frames.
+        frames: (usize, usize),
+        /// Its sample, for [`Destination::Samples`].
+        sample: Option<Sample>,
     },
     /// A pair failed: stop at once.
     Failed(HostError),
@@ -359,6 +421,7 @@ enum Msg {
         frames: usize,
         last_stem: Option<String>,
         size: Option<(usize, usize)>,
+        source_frames: Option<Vec<usize>>,
     },
 }
 
@@ -393,19 +456,23 @@ pub fn process(
     for _ in 0..in_flight {
         token_tx.send(()).expect("the receiver is alive");
     }
-    let (dir, mut stream) = match dest {
-        Destination::Dir(d) => (Some(d), None),
+    let (dir, mut stream, mut samples) = match dest {
+        Destination::Dir(d) => (Some(d), None, None),
         Destination::Stream {
             spec,
             format,
             writer,
-        } => (None, Some((spec, format, writer))),
+        } => (None, Some((spec, format, writer)), None),
+        Destination::Samples { spec, sink } => (None, None, Some((spec, sink))),
     };
     let stream_spec = stream.as_ref().map(|(spec, format, _)| (*spec, *format));
-    let needs_fields = match (dir, stream_spec) {
-        (Some(dir), _) => dir.spec().needs_fields(),
-        (None, Some((spec, _))) => spec.image_needs_fields(),
-        (None, None) => unreachable!("a destination is a folder or a stream"),
+    let sample_spec = samples.as_ref().map(|(spec, _)| *spec);
+    // A sample's motion score needs the fields.
+    let needs_fields = match (dir, stream_spec, sample_spec) {
+        (Some(dir), _, _) => dir.spec().needs_fields(),
+        (None, Some((spec, _)), _) => spec.image_needs_fields(),
+        (None, None, Some(_)) => true,
+        (None, None, None) => unreachable!("a destination is a folder, a stream or samples"),
     };
     let buffers = Buffers {
         frames: Pool::new(),
@@ -423,14 +490,7 @@ pub fn process(
                 tokens: token_rx,
                 msgs: reader_tx,
             };
-            read_pairs(
-                source,
-                options.max_frames,
-                links,
-                stop,
-                &buffers.frames,
-                desk,
-            )
+            read_pairs(source, options, links, stop, &buffers.frames, desk)
         });
         for _ in 0..threads {
             let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
@@ -439,6 +499,7 @@ pub fn process(
                 needs_fields,
                 dir,
                 stream: stream_spec,
+                samples: sample_spec,
                 engine: FrameEngine::new(),
                 rgb: Vec::new(),
                 desk,
@@ -452,6 +513,8 @@ pub fn process(
             payloads: &buffers.payloads,
             dir,
             stream: stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
+            samples: samples.as_mut().map(|(_, sink)| &mut **sink),
+            pair_names: options.pair_names,
             fps,
             keep_count: options.keep_count,
             delivered: 0,
@@ -474,15 +537,17 @@ struct ReaderLinks {
 /// `desk` where the input ends.
 fn read_pairs(
     source: &mut dyn FrameSource,
-    max_frames: Option<usize>,
+    options: Options,
     links: ReaderLinks,
     stop: &AtomicBool,
     pool: &Pool<Frame>,
     desk: &Desk,
 ) {
     let ReaderLinks { jobs, tokens, msgs } = links;
+    let max_frames = options.max_frames;
     let mut prev: Option<Arc<Frame>> = None;
     let mut frames = 0;
+    let mut source_frames = options.record_frames.then(Vec::new);
     loop {
         if stop.load(Ordering::SeqCst) {
             return;
@@ -504,6 +569,9 @@ fn read_pairs(
             }
         };
         frames += 1;
+        if let Some(used) = &mut source_frames {
+            used.push(frame.index);
+        }
         if let Some(prev) = prev.replace(Arc::clone(&frame)) {
             // Wait for room; a closed token channel means the run is stopping.
             if tokens.recv().is_err() {
@@ -513,6 +581,7 @@ fn read_pairs(
                 index: frames - 2,
                 prev,
                 next: frame,
+                pair_names: options.pair_names,
             };
             if jobs.send(job).is_err() {
                 return;
@@ -524,6 +593,7 @@ fn read_pairs(
         frames,
         last_stem: prev.as_ref().map(|f| f.stem.clone()),
         size: prev.as_ref().map(|f| f.gray.size()),
+        source_frames,
     });
 }
 
@@ -536,6 +606,8 @@ struct Worker<'a> {
     needs_fields: bool,
     dir: Option<&'a DirWriter>,
     stream: Option<(&'a OutputSpec, StreamFormat)>,
+    /// Results are samples of this spec.
+    samples: Option<&'a OutputSpec>,
     engine: FrameEngine,
     /// The `--variant` image of the pair (when it is not the payload itself).
     rgb: Vec<u8>,
@@ -591,7 +663,7 @@ impl Worker<'_> {
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             self.work(job, &mut payload)
         }))
-        .map(|done| done.map(|()| payload.into_inner()))
+        .map(|done| done.map(|sample| (payload.into_inner(), sample)))
         .unwrap_or_else(|_| {
             Err(HostError::invalid(
                 format!("frame {}", job.prev.stem),
@@ -599,33 +671,48 @@ impl Worker<'_> {
             ))
         });
         match result {
-            Ok(payload) => Msg::Done {
+            Ok((payload, sample)) => Msg::Done {
                 index: job.index,
-                stem: job.prev.stem.clone(),
+                stem: job.stem().into_owned(),
                 size: job.prev.gray.size(),
                 payload,
+                frames: (job.prev.index, job.next.index),
+                sample,
             },
             Err(e) => Msg::Failed(e),
         }
     }
 
-    /// Compute one pair, then write its files or encode its stream frame
-    /// into `payload`.
-    fn work(&mut self, job: &Job, payload: &mut PooledBytes<'_>) -> Result<(), HostError> {
+    /// Compute one pair, then write its files, encode its stream frame
+    /// into `payload`, or make its sample.
+    fn work(
+        &mut self,
+        job: &Job,
+        payload: &mut PooledBytes<'_>,
+    ) -> Result<Option<Sample>, HostError> {
         let (prev, next) = (&job.prev.gray, &job.next.gray);
+        let stem = job.stem();
         if self.needs_fields {
             let fields = self.compute.pair_with(&mut self.engine, prev, next)?;
             if let Some(dir) = self.dir {
-                dir.write(&job.prev.stem, &fields)?;
+                dir.write(&stem, &fields)?;
+            }
+            if let Some(spec) = self.samples {
+                return Ok(Some(Sample {
+                    files: spec.files(&stem, &fields)?,
+                    motion: fields.planes.mean_speed(),
+                }));
             }
             return match self.stream {
                 Some((spec, StreamFormat::Rgb24)) => {
                     let image = spec.image(&fields);
                     payload.overwrite(image.len())?.copy_from_slice(&image);
-                    Ok(())
+                    Ok(None)
                 }
-                Some((spec, StreamFormat::Y4m)) => y4m_frame_into(&spec.image(&fields), payload),
-                None => Ok(()),
+                Some((spec, StreamFormat::Y4m)) => {
+                    y4m_frame_into(&spec.image(&fields), payload).map(|()| None)
+                }
+                None => Ok(None),
             };
         }
         // Raw RGB goes out as computed; Y4M and files are made from the image.
@@ -647,12 +734,12 @@ impl Worker<'_> {
         };
         spec.arrange(image);
         if let Some(dir) = self.dir {
-            dir.write_image(&job.prev.stem, prev.width, prev.height, image)?;
+            dir.write_image(&stem, prev.width, prev.height, image)?;
         }
         if let Some((_, StreamFormat::Y4m)) = self.stream {
             y4m_frame_into(&self.rgb, payload)?;
         }
-        Ok(())
+        Ok(None)
     }
 }
 
@@ -691,8 +778,16 @@ impl ByteBuffer for PooledBytes<'_> {
     }
 }
 
-/// A computed result waiting for its turn: stem, frame size, stream bytes.
-type Delivery = (String, (usize, usize), PageBytes);
+/// A computed result waiting for its turn.
+struct Delivery {
+    stem: String,
+    size: (usize, usize),
+    /// Stream bytes.
+    payload: PageBytes,
+    /// Input indices of its frames.
+    frames: (usize, usize),
+    sample: Option<Sample>,
+}
 
 /// This thread's part: results in frame order, the stream, the count.
 struct Collector<'a, 'w, 'o> {
@@ -703,6 +798,9 @@ struct Collector<'a, 'w, 'o> {
     payloads: &'a Pool<PageBytes>,
     dir: Option<&'a DirWriter>,
     stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
+    samples: Option<&'w mut (dyn SampleSink + 'o)>,
+    /// Results are named after both frames ([`Options::pair_names`]).
+    pair_names: bool,
     fps: (u32, u32),
     keep_count: bool,
     /// Results delivered so far: the index of the next one.
@@ -728,7 +826,7 @@ impl Collector<'_, '_, '_> {
         let mut pending: BTreeMap<usize, Delivery> = BTreeMap::new();
         let mut input_error: Option<HostError> = None;
         let mut end = None;
-        let mut last: Option<(String, PageBytes)> = None;
+        let mut last: Option<Delivery> = None;
         for msg in msgs {
             match msg {
                 Msg::Done {
@@ -736,8 +834,17 @@ impl Collector<'_, '_, '_> {
                     stem,
                     size,
                     payload,
+                    frames,
+                    sample,
                 } => {
-                    pending.insert(index, (stem, size, payload));
+                    let delivery = Delivery {
+                        stem,
+                        size,
+                        payload,
+                        frames,
+                        sample,
+                    };
+                    pending.insert(index, delivery);
                 }
                 Msg::Failed(e) => self.fail(Some(e)),
                 Msg::InputFailed(e) => input_error = Some(e),
@@ -745,22 +852,23 @@ impl Collector<'_, '_, '_> {
                     frames,
                     last_stem,
                     size,
-                } => end = Some((frames, last_stem, size)),
+                    source_frames,
+                } => end = Some((frames, last_stem, size, source_frames)),
             }
             while self.error.is_none() && !self.closed {
-                let Some((stem, size, payload)) = pending.remove(&self.delivered) else {
+                let Some(delivery) = pending.remove(&self.delivered) else {
                     break;
                 };
-                if !self.deliver(size, &payload) {
+                if !self.deliver(&delivery) {
                     break;
                 }
                 on_output();
                 // The last result is kept only to be repeated (`--keep-count`);
                 // otherwise its buffer goes straight back to the workers.
                 if !self.keep_count {
-                    self.payloads.put(payload);
-                } else if let Some((_, used)) = last.replace((stem, payload)) {
-                    self.payloads.put(used);
+                    self.payloads.put(delivery.payload);
+                } else if let Some(used) = last.replace(delivery) {
+                    self.payloads.put(used.payload);
                 }
             }
         }
@@ -778,18 +886,21 @@ impl Collector<'_, '_, '_> {
                 ..Summary::default()
             });
         }
-        let (frames, last_stem, size) = end.expect("the reader ends with End or Failed");
+        let (frames, last_stem, size, source_frames) =
+            end.expect("the reader ends with End or Failed");
         let mut summary = Summary {
             frames,
             results: self.delivered,
             outputs: self.delivered,
             size,
             stream_closed: false,
+            source_frames,
         };
         if self.keep_count
-            && let (Some((from, payload)), Some(to)) = (last, last_stem)
+            && let (Some(from), Some(to)) = (last, last_stem)
         {
-            self.repeat_last(&from, &to, &payload)?;
+            let to = result_stem(&to, &to, self.pair_names);
+            self.repeat_last(&from, &to)?;
             on_output();
             summary.outputs += 1;
         }
@@ -806,16 +917,23 @@ impl Collector<'_, '_, '_> {
         }
     }
 
-    /// Put the next result out (on the stream, if any); false when the
-    /// stream failed or closed, which stops the run.
-    fn deliver(&mut self, size: (usize, usize), payload: &[u8]) -> bool {
+    /// Put the next result out (on the stream or as a sample, if any);
+    /// false when that failed or the stream closed, which stops the run.
+    fn deliver(&mut self, delivery: &Delivery) -> bool {
+        if let (Some(sink), Some(sample)) = (self.samples.as_mut(), &delivery.sample)
+            && let Err(e) = sink.sample(&delivery.stem, delivery.frames, sample)
+        {
+            self.fail(Some(e));
+            return false;
+        }
         if let Some((format, w)) = self.stream.as_mut() {
             let written = (|| {
                 if *format == StreamFormat::Y4m && !self.header_written {
-                    w.write_all(y4m_header(size.0, size.1, self.fps).as_bytes())?;
+                    let (width, height) = delivery.size;
+                    w.write_all(y4m_header(width, height, self.fps).as_bytes())?;
                     self.header_written = true;
                 }
-                w.write_all(payload)?;
+                w.write_all(&delivery.payload)?;
                 w.flush()
             })();
             if let Err(e) = written {
@@ -835,18 +953,37 @@ impl Collector<'_, '_, '_> {
         true
     }
 
-    /// `--keep-count`: the last result once more, labelled with the last frame.
-    fn repeat_last(&mut self, from: &str, to: &str, payload: &[u8]) -> Result<(), HostError> {
+    /// `--keep-count`: the last result once more, labelled with the last
+    /// frame (`to`).
+    fn repeat_last(&mut self, from: &Delivery, to: &str) -> Result<(), HostError> {
         if let Some(dir) = self.dir {
-            dir.repeat(from, to)?;
+            dir.repeat(&from.stem, to)?;
+        }
+        if let (Some(sink), Some(sample)) = (self.samples.as_mut(), &from.sample) {
+            let renamed = Sample {
+                files: sample
+                    .files
+                    .iter()
+                    .map(|(path, bytes)| (renamed_file(path, &from.stem, to), bytes.clone()))
+                    .collect(),
+                motion: sample.motion,
+            };
+            sink.sample(to, from.frames, &renamed)?;
         }
         if let Some((_, w)) = self.stream.as_mut() {
-            w.write_all(payload)
+            w.write_all(&from.payload)
                 .and_then(|()| w.flush())
                 .map_err(stdout_error)?;
         }
         Ok(())
     }
+}
+
+/// `path` (`[DIR/]FROM.EXT`) as `[DIR/]TO.EXT`.
+fn renamed_file(path: &std::path::Path, from: &str, to: &str) -> std::path::PathBuf {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    let ext = name.strip_prefix(from).unwrap_or(name);
+    path.with_file_name(format!("{to}{ext}"))
 }
 
 #[cfg(test)]
@@ -877,6 +1014,7 @@ mod tests {
             Ok(Some(Frame {
                 gray: Gray::new(24, 16, pixels).unwrap(),
                 stem: index_stem(t),
+                index: t,
             }))
         }
     }
@@ -926,6 +1064,8 @@ mod tests {
                 threads,
                 keep_count,
                 max_frames: None,
+                pair_names: false,
+                record_frames: false,
             },
             &mut || calls += 1,
         );

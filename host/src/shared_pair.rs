@@ -289,6 +289,7 @@ mod tests {
         Arc::new(Frame {
             gray: Gray::new(width, height, pixels).unwrap(),
             stem: format!("{seed:06}"),
+            index: seed,
         })
     }
 

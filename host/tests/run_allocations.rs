@@ -92,6 +92,8 @@ fn large_allocations(
             threads,
             keep_count: false,
             max_frames: None,
+            pair_names: false,
+            record_frames: false,
         },
         &mut || {},
     )

@@ -38,6 +38,7 @@ use super::status::{Record, Status, StatusLog};
 use crate::outputs::{DirWriter, OutputSpec};
 use crate::pipeline::{self, Compute, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
+use crate::sequence::sampled::FramePlan;
 use crate::sequence::{self, FrameSource, InputSpec, input_error};
 use crate::{HostError, atomic, workers};
 
@@ -104,6 +105,21 @@ pub struct DatasetArgs {
     /// Append the JSON-lines status records to FILE instead of stdout.
     #[arg(long, value_name = "FILE", help_heading = "Clusters")]
     pub status: Option<PathBuf>,
+    /// Write WebDataset shards instead of folders: DST/shard-NNNNNN.tar
+    /// (shard-IIII-NNNNNN.tar with --shard I/N), one sample per result:
+    /// KEY.rep.png (or .jpg), KEY.<field>.npy / .flo as asked, and
+    /// KEY.json (source path, source frames, motion score, settings); KEY
+    /// is <item path>/<result stem>. Items run one after another, each on
+    /// every thread; a rerun skips the items already in complete shards.
+    #[arg(long, help_heading = "WebDataset")]
+    pub webdataset: bool,
+    /// Close a shard once it holds BYTES or more, between items (an item's
+    /// samples are never split across shards): an integer with an optional
+    /// suffix k, M, G (powers of 1000) or Ki, Mi, Gi (powers of 1024)
+    /// [default: 1G].
+    #[arg(long, value_name = "BYTES", value_parser = super::webdataset::parse_bytes,
+          requires = "webdataset", help_heading = "WebDataset")]
+    pub shard_size: Option<u64>,
     /// The computation.
     #[command(flatten)]
     pub engine: EngineArgs,
@@ -263,7 +279,7 @@ pub fn manifest(src: &Path, list: &Path) -> Result<Vec<Item>, HostError> {
 
 /// The key an item is sharded by: its source path relative to `src`, with
 /// `/` separators (the file name when SRC is the item itself).
-fn shard_key(src: &Path, item: &Item) -> String {
+pub fn shard_key(src: &Path, item: &Item) -> String {
     let rel = item
         .src
         .strip_prefix(src)
@@ -278,7 +294,7 @@ fn shard_key(src: &Path, item: &Item) -> String {
 }
 
 /// How an item ended.
-enum Outcome {
+pub(super) enum Outcome {
     Done(Summary),
     Skipped,
     Failed(String),
@@ -286,15 +302,21 @@ enum Outcome {
     Interrupted,
 }
 
-/// The marker's text: what was made, and with which options.
+/// The marker's text: what was made, and with which options (and, when
+/// `--step` or `--fps` picked them, the input frames used).
 fn marker_text(item: &Item, summary: &Summary, options: &str) -> String {
-    format!(
+    let mut text = format!(
         "reynoldsflow dataset item\nsource: {}\nframes: {}\nresults: {}\noutputs: {}\noptions: {options}\n",
         item.src.display(),
         summary.frames,
         summary.results,
         summary.outputs
-    )
+    );
+    if let Some(used) = &summary.source_frames {
+        let list: Vec<String> = used.iter().map(usize::to_string).collect();
+        text += &format!("source_frames: {}\n", list.join(" "));
+    }
+    text
 }
 
 /// A finished item's marker: its options line, frames and outputs.
@@ -302,6 +324,7 @@ struct Marker {
     options: String,
     frames: Option<usize>,
     outputs: Option<usize>,
+    source_frames: Option<Vec<usize>>,
 }
 
 fn finished(out: &Path) -> Option<Marker> {
@@ -311,16 +334,42 @@ fn finished(out: &Path) -> Option<Marker> {
         options: field("options: ")?.to_owned(),
         frames: field("frames: ").and_then(|v| v.parse().ok()),
         outputs: field("outputs: ").and_then(|v| v.parse().ok()),
+        source_frames: field("source_frames: ").map(|v| {
+            v.split_whitespace()
+                .filter_map(|n| n.parse().ok())
+                .collect()
+        }),
     })
+}
+
+/// An item's frames, as `dataset` reads them (a frame folder, or a video),
+/// through `plan`.
+pub fn open_item(
+    src: &Path,
+    frames: bool,
+    plan: &FramePlan,
+) -> Result<Box<dyn FrameSource>, HostError> {
+    let source: Box<dyn FrameSource> = if frames {
+        Box::new(FolderSource::dir(src)?)
+    } else {
+        sequence::open(&InputSpec::Path {
+            path: src.to_owned(),
+            raw: None,
+        })?
+    };
+    plan.wrap(source, &src.display().to_string())
 }
 
 /// What every item is made with: checked once, shared by the workers.
 pub struct ItemRunner {
-    compute: Compute,
-    spec: OutputSpec,
-    options: Options,
+    pub(super) compute: Compute,
+    pub(super) spec: OutputSpec,
+    pub(super) options: Options,
+    pub(super) plan: FramePlan,
     fingerprint: String,
-    force: bool,
+    /// The settings as WebDataset samples record them.
+    pub(super) settings: serde_json::Value,
+    pub(super) force: bool,
 }
 
 impl ItemRunner {
@@ -339,7 +388,8 @@ impl ItemRunner {
                 "nothing left to write; add --viz, --npy or --flo",
             ));
         }
-        let fingerprint = format!(
+        let plan = output.frames.plan();
+        let mut fingerprint = format!(
             "{} {:?} scale={:?} s={}/{} lambda={} keep_count={} max_frames={:?}",
             spec.describe(),
             compute.engine(),
@@ -350,11 +400,21 @@ impl ItemRunner {
             output.keep_count,
             output.max_frames
         );
+        // Only with --step, --fps, --resize or --short-side, so that
+        // markers made before them still match.
+        if !plan.is_identity() {
+            fingerprint += &format!(" {}", plan.describe());
+        }
+        let mut options = output.options(threads);
+        options.record_frames = plan.picks();
+        let settings = super::webdataset::settings(engine, &spec, output, &plan);
         Ok(Self {
             compute,
             spec,
-            options: output.options(threads),
+            options,
+            plan,
             fingerprint,
+            settings,
             force,
         })
     }
@@ -370,14 +430,7 @@ impl ItemRunner {
             if marker.exists() {
                 fs::remove_file(&marker).map_err(|e| HostError::io(&marker, e))?;
             }
-            let mut source: Box<dyn FrameSource> = if item.frames {
-                Box::new(FolderSource::dir(&item.src)?)
-            } else {
-                sequence::open(&InputSpec::Path {
-                    path: item.src.clone(),
-                    raw: None,
-                })?
-            };
+            let mut source = open_item(&item.src, item.frames, &self.plan)?;
             let dir = DirWriter::prepare(out, &self.spec)?;
             let summary = pipeline::process(
                 &mut *source,
@@ -404,7 +457,7 @@ impl ItemRunner {
 }
 
 /// The status record of `item`, written to `out`.
-fn record(item: &Item, out: &Path, outcome: &Outcome, seconds: f64) -> Record {
+pub(super) fn record(item: &Item, out: &Path, outcome: &Outcome, seconds: f64) -> Record {
     let mut r = Record {
         path: item.src.display().to_string(),
         output: out.display().to_string(),
@@ -413,13 +466,18 @@ fn record(item: &Item, out: &Path, outcome: &Outcome, seconds: f64) -> Record {
         outputs: None,
         seconds,
         error: None,
+        source_frames: None,
     };
     match outcome {
-        Outcome::Done(s) => (r.frames, r.outputs) = (Some(s.frames), Some(s.outputs)),
+        Outcome::Done(s) => {
+            (r.frames, r.outputs) = (Some(s.frames), Some(s.outputs));
+            r.source_frames = s.source_frames.clone();
+        }
         Outcome::Skipped => {
             r.status = Status::Skipped;
             if let Some(m) = finished(out) {
                 (r.frames, r.outputs) = (m.frames, m.outputs);
+                r.source_frames = m.source_frames;
             }
         }
         Outcome::Failed(why) => (r.status, r.error) = (Status::Failed, Some(why.clone())),
@@ -456,13 +514,18 @@ pub fn convert(
 }
 
 /// `reynoldsflow: failed: <file>: <reason>`, naming the file once.
-fn failure_line(item: &Item, why: &str) -> String {
+pub(super) fn failure_line(item: &Item, why: &str) -> String {
     let src = item.src.display().to_string();
     if why.starts_with(&src) {
         format!("reynoldsflow: failed: {why}")
     } else {
         format!("reynoldsflow: failed: {src}: {why}")
     }
+}
+
+/// The checks of the flags beyond clap's (a bad command line, exit status 2).
+pub fn check(args: &DatasetArgs) -> Result<(), HostError> {
+    args.output.check_types(false)
 }
 
 /// `--shard`, else the scheduler's, else every item.
@@ -503,21 +566,35 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
 
     install_interrupt_handler();
     let started = Instant::now();
-    let workers = threads.min(todo.len()).max(1);
-    let runner = ItemRunner::new(
-        &args.engine,
-        &args.output,
-        threads.div_ceil(workers),
-        args.force,
-    )?;
-    let run = ItemsRun {
-        args,
-        runner: &runner,
-        log: &log,
-        items: &items,
-        started,
+    let (results, log_error) = if args.webdataset {
+        // One item at a time, on every thread: samples go into shards in order.
+        let runner = ItemRunner::new(&args.engine, &args.output, threads, args.force)?;
+        let shards = super::webdataset::Shards {
+            args,
+            shard,
+            runner: &runner,
+            log: &log,
+            items: &items,
+            started,
+        };
+        shards.run(&todo)?
+    } else {
+        let workers = threads.min(todo.len()).max(1);
+        let runner = ItemRunner::new(
+            &args.engine,
+            &args.output,
+            threads.div_ceil(workers),
+            args.force,
+        )?;
+        let run = ItemsRun {
+            args,
+            runner: &runner,
+            log: &log,
+            items: &items,
+            started,
+        };
+        run.on_workers(&todo, workers)
     };
-    let (results, log_error) = run.on_workers(&todo, workers);
     for (i, outcome) in results {
         outcomes[i] = Some(outcome);
     }

@@ -19,6 +19,7 @@ pub mod shard;
 pub mod status;
 pub mod values;
 pub mod verify;
+pub mod webdataset;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -94,6 +95,15 @@ where
         Ok(cli) => cli,
         Err(e) => return usage_error(&e),
     };
+    // The checks of flags beyond clap's: a bad command line (2).
+    let checked = match &cli.command {
+        Command::Run(args) => args.output.check_types(args.out.as_os_str() == "-"),
+        Command::Dataset(args) => dataset::check(args),
+        _ => Ok(()),
+    };
+    if let Err(e) = checked {
+        return bad_command_line(&e.to_string());
+    }
     let result = match &cli.command {
         Command::Pair(args) => pair::run(args),
         Command::Budget(args) => budget::run(args),

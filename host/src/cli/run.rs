@@ -12,8 +12,12 @@ use reynoldsflow_core::IntensityScale;
 use super::progress::Progress;
 use super::values::{self, EngineKind, ScaleArg, TileSize};
 use crate::HostError;
-use crate::outputs::{self, DirWriter, Fields, OutputSpec, StreamFormat, Variant};
+use crate::outputs::{
+    self, DEFAULT_JPEG_QUALITY, DirWriter, Fields, ImageFormat, ImageFormatName, NpyDtype,
+    OutputSpec, StreamFormat, Variant,
+};
 use crate::pipeline::{self, Compute, Destination, Options, Summary};
+use crate::sequence::sampled::{self, FramePlan, FrameSize, Rate, Sampling};
 use crate::sequence::{self, FrameSource, InputSpec};
 
 /// Examples shown by `reynoldsflow run --help`.
@@ -121,6 +125,18 @@ pub struct OutputArgs {
     #[arg(long, value_name = "FIELDS", num_args = 0..=1, require_equals = true,
           default_missing_value = "v_c,v_d,v_R", value_parser = outputs::parse_field_list)]
     pub npy: Option<Fields>,
+    /// Element type of the --npy files: f64 (float64, as computed), f32 or
+    /// f16, each value rounded to nearest (ties to even) from the float64
+    /// field [default: f64].
+    #[arg(long, value_enum, value_name = "f16|f32|f64", requires = "npy")]
+    pub npy_dtype: Option<NpyDtype>,
+    /// How images are stored: png (lossless, STEM.png) or jpg (baseline
+    /// JPEG, lossy, STEM.jpg; --jpeg-quality) [default: png].
+    #[arg(long, value_enum, value_name = "png|jpg")]
+    pub image_format: Option<ImageFormatName>,
+    /// JPEG quality, 1 to 100, with --image-format jpg [default: 95].
+    #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=100), requires = "image_format")]
+    pub jpeg_quality: Option<u8>,
     /// Also write fields as Middlebury .flo (f32 u, v) in
     /// DIR/FIELD/STEM.flo [default: v_R].
     #[arg(long, value_name = "FIELDS", num_args = 0..=1, require_equals = true,
@@ -130,9 +146,55 @@ pub struct OutputArgs {
     /// result, so every frame has one (label files stay aligned).
     #[arg(long)]
     pub keep_count: bool,
-    /// Read at most N frames of each input.
+    /// Read at most N frames of each input (with --step or --fps: use at
+    /// most N of the frames they pick).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub max_frames: Option<u64>,
+    /// Which frames make pairs, and their size.
+    #[command(flatten)]
+    pub frames: FrameArgs,
+}
+
+/// `--step`, `--fps`, `--resize`, `--short-side`: which frames make pairs
+/// and at what size (shared by `run` and `dataset`).
+#[derive(Debug, Default, clap::Args)]
+#[command(next_help_heading = "Frames (applied before the pairs are formed)")]
+pub struct FrameArgs {
+    /// Resize every frame to WxH before its pairs: area averaging down,
+    /// bilinear up (integers only, the same bytes on every machine;
+    /// docs/resample.md).
+    #[arg(long, value_name = "WxH", value_parser = sampled::parse_resize, conflicts_with = "short_side")]
+    pub resize: Option<FrameSize>,
+    /// Resize every frame so its shorter side is N (even), the longer one
+    /// keeping the aspect, rounded to the nearest even size (1920x1080 at
+    /// 224: 398x224); the resampler of --resize.
+    #[arg(long, value_name = "N", value_parser = sampled::parse_short_side)]
+    pub short_side: Option<FrameSize>,
+    /// Use frames 0, K, 2K, ... only: pairs (0, K), (K, 2K), ...; each
+    /// result is named PREV_NEXT after the stems of both its frames.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..), conflicts_with = "fps")]
+    pub step: Option<u64>,
+    /// Use F frames per second of the input's own rate (Y4M header, or
+    /// ffmpeg's for other video; an error for inputs without one, such as
+    /// frame folders): frame floor(k * rate / F) for k = 0, 1, ...; every
+    /// frame when F is at or above the rate. F: a decimal or a ratio
+    /// (10, 29.97, 30000/1001). Results are named PREV_NEXT as with --step.
+    #[arg(long, value_name = "F", value_parser = sampled::parse_rate)]
+    pub fps: Option<Rate>,
+}
+
+impl FrameArgs {
+    /// The plan these flags make.
+    pub fn plan(&self) -> FramePlan {
+        FramePlan {
+            sampling: match (self.step, self.fps) {
+                (Some(k), _) => Sampling::Step(k),
+                (None, Some(rate)) => Sampling::Fps(rate),
+                (None, None) => Sampling::Every,
+            },
+            size: self.resize.or(self.short_side),
+        }
+    }
 }
 
 fn parse_positive(s: &str) -> Result<f64, String> {
@@ -152,6 +214,13 @@ impl OutputArgs {
             npy: self.npy.clone().map(|f| f.0).unwrap_or_default(),
             flo: self.flo.clone().map(|f| f.0).unwrap_or_default(),
             hsv_max: self.hsv_max,
+            npy_dtype: self.npy_dtype.unwrap_or_default(),
+            image_format: match self.image_format {
+                None | Some(ImageFormatName::Png) => ImageFormat::Png,
+                Some(ImageFormatName::Jpg) => ImageFormat::Jpeg {
+                    quality: self.jpeg_quality.unwrap_or(DEFAULT_JPEG_QUALITY),
+                },
+            },
         }
     }
 
@@ -161,7 +230,34 @@ impl OutputArgs {
             threads,
             keep_count: self.keep_count,
             max_frames: self.max_frames.map(|n| n as usize),
+            pair_names: self.frames.plan().picks(),
+            record_frames: false,
         }
+    }
+
+    /// The checks of the file-type flags beyond clap's (a bad command
+    /// line, exit status 2): `to_stdout` for `--out -`.
+    pub fn check_types(&self, to_stdout: bool) -> Result<(), HostError> {
+        if to_stdout
+            && let Some(flag) = [
+                (self.image_format.is_some(), "--image-format"),
+                (self.npy_dtype.is_some(), "--npy-dtype"),
+            ]
+            .iter()
+            .find_map(|(given, flag)| given.then_some(*flag))
+        {
+            return Err(HostError::invalid(
+                flag,
+                "applies to files in an output folder; --out - streams raw frames",
+            ));
+        }
+        if self.jpeg_quality.is_some() && self.image_format != Some(ImageFormatName::Jpg) {
+            return Err(HostError::invalid(
+                "--jpeg-quality",
+                "applies to --image-format jpg only",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -284,7 +380,12 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
     let input = args.raw.input_spec(args.input.as_deref())?;
     install_interrupt_handler();
     let started = Instant::now();
-    let mut source = sequence::open(&input)?;
+    let name = sequence::display_name(&input);
+    let mut source = args
+        .output
+        .frames
+        .plan()
+        .wrap(sequence::open(&input)?, &name)?;
     let options = args.output.options(args.engine.threads());
     let progress = Progress::new(progress_total(&*source, &options), "results");
     let mut tick = || progress.inc();
@@ -311,7 +412,6 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
     };
     progress.finish();
     let summary = summary?;
-    let name = sequence::display_name(&input);
     report(
         &summary,
         &name,

@@ -54,12 +54,16 @@ pub struct Record {
     pub seconds: f64,
     /// Why it failed.
     pub error: Option<String>,
+    /// With `--step` or `--fps`: the input index of every frame used, in
+    /// order (result `i` came from frames `i` and `i + 1` of this list);
+    /// absent from the JSON otherwise.
+    pub source_frames: Option<Vec<usize>>,
 }
 
 impl Record {
     /// The record as one line of JSON (no newline).
     pub fn json(&self) -> String {
-        json!({
+        let mut record = json!({
             "path": self.path,
             "output": self.output,
             "status": self.status.name(),
@@ -67,8 +71,11 @@ impl Record {
             "outputs": self.outputs,
             "seconds": (self.seconds * 1e3).round() / 1e3,
             "error": self.error,
-        })
-        .to_string()
+        });
+        if let Some(used) = &self.source_frames {
+            record["source_frames"] = json!(used);
+        }
+        record.to_string()
     }
 }
 
@@ -128,6 +135,7 @@ mod tests {
             outputs: Some(3),
             seconds: 0.123_456,
             error: Some("truncated:\nframe 2".to_owned()),
+            source_frames: None,
         };
         let line = record.json();
         assert!(!line.contains('\n'), "{line}");

@@ -41,14 +41,22 @@ Exit status: 0 identical (or within --tolerance), 1 different, a wrong frame cou
 or an unreadable input or capture, 2 a bad command line.";
 
 /// Arguments of `reynoldsflow verify`. The output flags of `run` that a
-/// stream cannot carry (--no-rep, --viz, --npy, --flo) come with the shared
-/// [`OutputArgs`]; they are hidden here and refused.
+/// stream cannot carry (--no-rep, --viz, --npy, --flo, the file types) and
+/// the frame flags (--step, --fps, --resize, --short-side) come with the
+/// shared [`OutputArgs`]; they are hidden here and refused.
 #[derive(Debug, clap::Args)]
 #[command(
     mut_arg("no_rep", |a| a.hide(true)),
     mut_arg("viz", |a| a.hide(true)),
     mut_arg("npy", |a| a.hide(true)),
     mut_arg("flo", |a| a.hide(true)),
+    mut_arg("npy_dtype", |a| a.hide(true)),
+    mut_arg("image_format", |a| a.hide(true)),
+    mut_arg("jpeg_quality", |a| a.hide(true)),
+    mut_arg("resize", |a| a.hide(true)),
+    mut_arg("short_side", |a| a.hide(true)),
+    mut_arg("step", |a| a.hide(true)),
+    mut_arg("fps", |a| a.hide(true)),
 )]
 pub struct VerifyArgs {
     /// The frames the device was given: anything run reads (a video, a Y4M
@@ -107,6 +115,13 @@ pub fn prepare(args: &VerifyArgs) -> Result<Plan, HostError> {
         (out.viz, "--viz"),
         (out.npy.is_some(), "--npy"),
         (out.flo.is_some(), "--flo"),
+        (out.npy_dtype.is_some(), "--npy-dtype"),
+        (out.image_format.is_some(), "--image-format"),
+        (out.jpeg_quality.is_some(), "--jpeg-quality"),
+        (out.frames.resize.is_some(), "--resize"),
+        (out.frames.short_side.is_some(), "--short-side"),
+        (out.frames.step.is_some(), "--step"),
+        (out.frames.fps.is_some(), "--fps"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(given, _)| *given) {
         return Err(HostError::invalid(

@@ -6,8 +6,11 @@
 //! |---|---|---|
 //! | `DIR/STEM.png` | (default; `--no-rep` drops it) | RGB8 image of the `--variant` ([`Variant`]) |
 //! | `DIR/hsv/STEM.png` | `--viz` | colour-wheel coding of `v_R` ([`crate::viz`]) |
-//! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64, shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
+//! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64 (or `--npy-dtype f32`/`f16`: rounded to nearest), shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
 //! | `DIR/v_R/STEM.flo` (or `v_c/`, `v_d/`) | `--flo` (or `--flo=v_c,…`) | Middlebury `.flo` ([`flo`]): `f32` `(u, v)` |
+//!
+//! With `--image-format jpg` the images are `STEM.jpg` (baseline JPEG of
+//! `--jpeg-quality`, RGB), not PNGs.
 //!
 //! so every kind of output of one frame has the same stem, in a folder of
 //! its own. Each file is written to a hidden temp name in its folder
@@ -29,6 +32,7 @@ use crate::{FlowPlanes, HostError, atomic, image_io, viz};
 #[cfg(feature = "crash-injection")]
 pub mod crash_injection;
 pub mod flo;
+pub mod shards;
 
 /// The representation variants (the paper's ablation), and the colour wheel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -74,6 +78,72 @@ impl Field {
             Field::VC => "v_c",
             Field::VD => "v_d",
             Field::VR => "v_R",
+        }
+    }
+}
+
+/// `--npy-dtype`: the element type of `.npy` fields.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum NpyDtype {
+    /// IEEE binary16 (`<f2`), each float64 value rounded to nearest (ties to even).
+    F16,
+    /// IEEE binary32 (`<f4`), each value rounded to nearest (ties to even).
+    F32,
+    /// IEEE binary64 (`<f8`): the values as computed.
+    #[default]
+    F64,
+}
+
+impl NpyDtype {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            NpyDtype::F16 => "f16",
+            NpyDtype::F32 => "f32",
+            NpyDtype::F64 => "f64",
+        }
+    }
+}
+
+/// `--image-format`: how images are stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// PNG, lossless (`STEM.png`).
+    #[default]
+    Png,
+    /// Baseline JPEG of this quality, 1 to 100 (`STEM.jpg`), lossy.
+    Jpeg {
+        /// The encoder's quality, 1 to 100.
+        quality: u8,
+    },
+}
+
+/// `--image-format`'s names on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ImageFormatName {
+    /// Lossless PNG (the default).
+    Png,
+    /// Lossy JPEG (--jpeg-quality).
+    Jpg,
+}
+
+/// The JPEG quality when `--jpeg-quality` is not given.
+pub const DEFAULT_JPEG_QUALITY: u8 = 95;
+
+impl ImageFormat {
+    /// The file extension.
+    pub fn extension(self) -> &'static str {
+        match self {
+            ImageFormat::Png => "png",
+            ImageFormat::Jpeg { .. } => "jpg",
+        }
+    }
+
+    /// An RGB8 image of `width × height` in this format.
+    pub fn encode(self, width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, HostError> {
+        match self {
+            ImageFormat::Png => image_io::encode_png(width, height, rgb),
+            ImageFormat::Jpeg { quality } => image_io::encode_jpeg(width, height, rgb, quality),
         }
     }
 }
@@ -144,6 +214,10 @@ pub struct OutputSpec {
     pub flo: Vec<Field>,
     /// Colour-wheel radius in pixels; `None`: each frame's longest vector.
     pub hsv_max: Option<f64>,
+    /// The element type of the `.npy` fields.
+    pub npy_dtype: NpyDtype,
+    /// How the images are stored.
+    pub image_format: ImageFormat,
 }
 
 impl Default for OutputSpec {
@@ -155,6 +229,8 @@ impl Default for OutputSpec {
             npy: Vec::new(),
             flo: Vec::new(),
             hsv_max: None,
+            npy_dtype: NpyDtype::F64,
+            image_format: ImageFormat::Png,
         }
     }
 }
@@ -231,11 +307,12 @@ impl OutputSpec {
         let (w, h) = (f.planes.width, f.planes.height);
         let mut files = Vec::new();
         if self.rep {
-            files.push(image_file(stem, w, h, &self.image(f))?);
+            files.push(self.image_file(stem, w, h, &self.image(f))?);
         }
         if self.viz {
-            let png = image_io::encode_png(w, h, &self.hsv(f))?;
-            files.push((Path::new("hsv").join(format!("{stem}.png")), png));
+            let image = self.image_format.encode(w, h, &self.hsv(f))?;
+            let name = format!("{stem}.{}", self.image_format.extension());
+            files.push((Path::new("hsv").join(name), image));
         }
         for field in [Field::VC, Field::VD, Field::VR] {
             let (npy, flo) = (self.npy.contains(&field), self.flo.contains(&field));
@@ -245,7 +322,8 @@ impl OutputSpec {
             let (x, y) = f.field(field);
             let dir = Path::new(field.name());
             if npy {
-                files.push((dir.join(format!("{stem}.npy")), encode_npy_xy(h, w, &x, &y)));
+                let npy = encode_npy_xy_as(self.npy_dtype, h, w, &x, &y);
+                files.push((dir.join(format!("{stem}.npy")), npy));
             }
             if flo {
                 files.push((dir.join(format!("{stem}.flo")), flo::encode(w, h, &x, &y)?));
@@ -254,10 +332,12 @@ impl OutputSpec {
         Ok(files)
     }
 
-    /// The options as one canonical line (for dataset completion markers).
+    /// The options as one canonical line (for dataset completion markers):
+    /// the types of `--npy-dtype` and `--image-format` appear only when
+    /// they are not the defaults, so markers made before them still match.
     pub fn describe(&self) -> String {
         let list = |v: &[Field]| v.iter().map(|f| f.name()).collect::<Vec<_>>().join(",");
-        format!(
+        let mut line = format!(
             "variant={} rep={} viz={} npy=[{}] flo=[{}] hsv_max={:?}",
             self.variant.name(),
             self.rep,
@@ -265,38 +345,75 @@ impl OutputSpec {
             list(&self.npy),
             list(&self.flo),
             self.hsv_max
-        )
+        );
+        if self.npy_dtype != NpyDtype::F64 {
+            line += &format!(" npy_dtype={}", self.npy_dtype.name());
+        }
+        if let ImageFormat::Jpeg { quality } = self.image_format {
+            line += &format!(" image=jpg:{quality}");
+        }
+        line
     }
-}
 
-/// The file `STEM.png` of the `--variant` image.
-fn image_file(
-    stem: &str,
-    width: usize,
-    height: usize,
-    image: &[u8],
-) -> Result<(PathBuf, Vec<u8>), HostError> {
-    let png = image_io::encode_png(width, height, image)?;
-    Ok((PathBuf::from(format!("{stem}.png")), png))
+    /// The file `STEM.png` (or `.jpg`) of the `--variant` image.
+    fn image_file(
+        &self,
+        stem: &str,
+        width: usize,
+        height: usize,
+        image: &[u8],
+    ) -> Result<(PathBuf, Vec<u8>), HostError> {
+        let bytes = self.image_format.encode(width, height, image)?;
+        let name = format!("{stem}.{}", self.image_format.extension());
+        Ok((PathBuf::from(name), bytes))
+    }
 }
 
 /// A `.npy` of shape `(height, width, 2)`, float64, C order: `[..., 0]` is
 /// `x`, `[..., 1]` is `y`.
 pub fn encode_npy_xy(height: usize, width: usize, x: &[f64], y: &[f64]) -> Vec<u8> {
+    encode_npy_xy_as(NpyDtype::F64, height, width, x, y)
+}
+
+/// [`encode_npy_xy`] with elements of `dtype`, each value rounded to
+/// nearest (ties to even) from float64.
+pub fn encode_npy_xy_as(
+    dtype: NpyDtype,
+    height: usize,
+    width: usize,
+    x: &[f64],
+    y: &[f64],
+) -> Vec<u8> {
     assert!(
         x.len() == height * width && y.len() == height * width,
         "plane size"
     );
-    let mut bytes = Vec::with_capacity(128 + 16 * x.len());
-    let mut writer = npyz::WriteOptions::<f64>::new()
+    let values = x.iter().zip(y).flat_map(|(a, b)| [*a, *b]);
+    let shape = [height as u64, width as u64, 2];
+    match dtype {
+        NpyDtype::F64 => npy_bytes(&shape, values),
+        // `as` rounds to nearest, ties to even.
+        NpyDtype::F32 => npy_bytes(&shape, values.map(|v| v as f32)),
+        // Directly from f64 (not through f32, which would round twice).
+        NpyDtype::F16 => npy_bytes(&shape, values.map(half::f16::from_f64)),
+    }
+}
+
+/// A C-order `.npy` of `shape` holding `values`, in NumPy's default dtype
+/// for `T` (little-endian).
+fn npy_bytes<T: npyz::Serialize + npyz::AutoSerialize>(
+    shape: &[u64],
+    values: impl Iterator<Item = T>,
+) -> Vec<u8> {
+    let count: u64 = shape.iter().product();
+    let mut bytes = Vec::with_capacity(128 + std::mem::size_of::<T>() * count as usize);
+    let mut writer = npyz::WriteOptions::<T>::new()
         .default_dtype()
-        .shape(&[height as u64, width as u64, 2])
+        .shape(shape)
         .writer(&mut bytes)
         .begin_nd()
         .expect("writing to memory");
-    writer
-        .extend(x.iter().zip(y).flat_map(|(a, b)| [*a, *b]))
-        .expect("writing to memory");
+    writer.extend(values).expect("writing to memory");
     writer.finish().expect("writing to memory");
     bytes
 }
@@ -447,7 +564,7 @@ impl DirWriter {
         if !self.spec.rep {
             return Ok(());
         }
-        self.write_files(&[image_file(stem, width, height, image)?])
+        self.write_files(&[self.spec.image_file(stem, width, height, image)?])
     }
 
     fn write_files(&self, files: &[(PathBuf, Vec<u8>)]) -> Result<(), HostError> {
@@ -461,14 +578,15 @@ impl DirWriter {
 
     /// `--keep-count`: copy every file of the result `from` to the stem `to`.
     pub fn repeat(&self, from: &str, to: &str) -> Result<(), HostError> {
-        let mut names: Vec<PathBuf> = Vec::new();
+        let mut dirs: Vec<&str> = Vec::new();
         if self.spec.rep {
-            names.push(PathBuf::from(from));
+            dirs.push("");
         }
-        names.extend(self.spec.subdirs().iter().map(|d| Path::new(d).join(from)));
-        for base in names {
-            for ext in ["png", "npy", "flo"] {
-                let src = self.root.join(base.with_extension(ext));
+        dirs.extend(self.spec.subdirs());
+        for dir in dirs {
+            for ext in ["png", "jpg", "npy", "flo"] {
+                // Named, not `with_extension`: a stem may hold a dot (`img.002`).
+                let src = self.root.join(dir).join(format!("{from}.{ext}"));
                 if !src.is_file() {
                     continue;
                 }

@@ -203,6 +203,7 @@ impl FrameSource for FolderSource {
         Ok(Some(Frame {
             stem: stem_of(path).to_owned(),
             gray,
+            index: self.next - 1,
         }))
     }
 

@@ -9,6 +9,10 @@
 //! | raw 8-bit gray frames (`--raw WxH`, from `-` or a file) | [`raw`]: `W·H` bytes per frame, back to back | `000000`, … |
 //! | any other file (MP4, AVI, MKV, …) | [`ffmpeg`]: an `ffmpeg` subprocess decodes to 8-bit gray Y4M | `000000`, … |
 //! | nothing | [`synthetic`]: the built-in demo scene | `000000`, … |
+//!
+//! Any of them can be put behind [`sampled::Sampled`] (`--step`, `--fps`,
+//! `--resize`, `--short-side`), which picks and resizes frames before the
+//! pairs are formed.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -20,6 +24,7 @@ pub mod ffmpeg;
 pub mod folder;
 pub mod natural;
 pub mod raw;
+pub mod sampled;
 pub mod synthetic;
 pub mod y4m;
 
@@ -31,6 +36,9 @@ pub struct Frame {
     /// Its label: the stem every output of the result labelled with this
     /// frame is named after (a file stem, or a zero-padded index).
     pub stem: String,
+    /// Its position in the input, from 0 (the source frame index that
+    /// `--step` and `--fps` pick by, and that status records report).
+    pub index: usize,
 }
 
 /// A source of frames, read one at a time.
@@ -144,6 +152,7 @@ impl Frame {
                 pixels: Vec::new(),
             },
             stem: String::new(),
+            index: 0,
         }
     }
 }

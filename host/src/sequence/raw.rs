@@ -95,6 +95,7 @@ impl FrameSource for RawSource {
         Ok(Some(Frame {
             gray: Gray::new(self.width, self.height, pixels)?,
             stem: index_stem(index),
+            index,
         }))
     }
 

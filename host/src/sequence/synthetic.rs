@@ -196,6 +196,7 @@ impl FrameSource for Demo {
         Ok(Some(Frame {
             gray: render(&self.world, t),
             stem: index_stem(t),
+            index: t,
         }))
     }
 

@@ -242,6 +242,7 @@ impl Y4mSource {
         // The header has checked that both sides are at least 1.
         (frame.gray.width, frame.gray.height) = (w, h);
         write_index_stem(&mut frame.stem, index);
+        frame.index = index;
         self.position += (line.len() + 1 + frame_bytes) as u64;
         self.index += 1;
         Ok(true)
