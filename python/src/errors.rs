@@ -48,6 +48,13 @@ fn pythonic(message: &str) -> String {
         ("--tile", "tile"),
         ("--no-rep", "rep=False"),
         ("--viz", "viz"),
+        ("--npy-dtype", "npy_dtype"),
+        ("--image-format", "image_format"),
+        ("--jpeg-quality", "jpeg_quality"),
+        ("--short-side", "short_side"),
+        ("--resize", "resize"),
+        ("--step", "step"),
+        ("--fps", "fps"),
         ("--npy", "npy"),
         ("--flo", "flo"),
     ]

@@ -1,6 +1,13 @@
-//! NumPy arrays in: uint8 frames of any strides and flow arrays, checked
+//! Arrays in: uint8 frames of any strides and flow arrays, checked
 //! (`TypeError` for the type, dtype or number of dimensions, `ValueError`
 //! for the shape) and read without the GIL into the host's [`Gray`].
+//!
+//! Besides `numpy.ndarray`, anything that exports its memory to NumPy
+//! without a copy: an object with `__dlpack__` on the CPU (a torch tensor,
+//! a JAX or CuPy array in host memory) through `numpy.from_dlpack`, or one
+//! with `__array_interface__` / `__array_struct__` through `numpy.asarray`.
+//! Either gives a view of the same memory with the object's strides, read
+//! exactly as an ndarray of those strides is.
 
 use numpy::ndarray::{ArrayViewD, Ix3};
 use numpy::{
@@ -20,24 +27,61 @@ pub struct Frames<'py> {
     rows_axis: usize,
 }
 
-/// `obj` as an ndarray, or a `TypeError` naming `name`.
-fn ndarray<'a, 'py>(
-    obj: &'a Bound<'py, PyAny>,
-    name: &str,
-) -> PyResult<&'a Bound<'py, PyUntypedArray>> {
-    obj.cast::<PyUntypedArray>().map_err(|_| {
+/// DLPack's device types of memory the CPU reads: `kDLCPU`, `kDLCUDAHost`
+/// (pinned host memory), `kDLROCMHost`.
+const HOST_DEVICES: [i64; 3] = [1, 3, 11];
+
+/// `obj` as an ndarray viewing its memory (no copy), or a `TypeError`
+/// naming `name`.
+pub fn ndarray<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, PyUntypedArray>> {
+    if let Ok(array) = obj.cast::<PyUntypedArray>() {
+        return Ok(array.clone());
+    }
+    let type_name = || {
+        obj.get_type()
+            .name()
+            .map_or_else(|_| "an object".to_owned(), |n| n.to_string())
+    };
+    let py = obj.py();
+    let numpy = py.import("numpy")?;
+    let converted = if obj.hasattr("__dlpack__")? {
+        if obj.hasattr("__dlpack_device__")? {
+            let (device, id): (i64, i64) = obj.call_method0("__dlpack_device__")?.extract()?;
+            if !HOST_DEVICES.contains(&device) {
+                return Err(PyTypeError::new_err(format!(
+                    "{name}: a {} on DLPack device ({device}, {id}), not in host memory; \
+                     copy it to the CPU first (tensor.cpu(), cupy.asnumpy(array))",
+                    type_name()
+                )));
+            }
+        }
+        match numpy.getattr("from_dlpack") {
+            Ok(from_dlpack) => from_dlpack.call1((obj,)),
+            // NumPy before 1.22: the array interface, where the object has one.
+            Err(_) => numpy.call_method1("asarray", (obj,)),
+        }
+    } else if obj.hasattr("__array_interface__")? || obj.hasattr("__array_struct__")? {
+        numpy.call_method1("asarray", (obj,))
+    } else {
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected a numpy.ndarray or an array exporting __dlpack__ or \
+             __array_interface__ (e.g. a CPU torch tensor), got {}",
+            type_name()
+        )));
+    };
+    let converted = converted.map_err(|e| {
         PyTypeError::new_err(format!(
-            "{name}: expected a numpy.ndarray, got {}",
-            obj.get_type()
-                .name()
-                .map_or_else(|_| "an object".to_owned(), |n| n.to_string())
+            "{name}: cannot view the {} as an array: {e}",
+            type_name()
         ))
-    })
+    })?;
+    Ok(converted.cast::<PyUntypedArray>()?.clone())
 }
 
 impl<'py> Frames<'py> {
     fn check(obj: &Bound<'py, PyAny>, name: &str, dims: usize, what: &str) -> PyResult<Self> {
         let array = ndarray(obj, name)?;
+        let array = &array;
         let py = obj.py();
         if !array.dtype().is_equiv_to(&dtype::<u8>(py)) {
             return Err(PyTypeError::new_err(format!(
@@ -108,6 +152,7 @@ pub fn gray(view: ArrayViewD<'_, u8>) -> Result<Gray, HostError> {
 /// An `(H, W, 2)` float32 or float64 array as `(H, W, x plane, y plane)`.
 pub fn flow_planes(obj: &Bound<'_, PyAny>) -> PyResult<(usize, usize, Vec<f64>, Vec<f64>)> {
     let array = ndarray(obj, "flow")?;
+    let array = &array;
     let shape = array.shape().to_vec();
     if shape.len() != 3 {
         return Err(PyTypeError::new_err(format!(

@@ -8,31 +8,60 @@
 //! dimensions, `ValueError` for a wrong shape or value), releases the GIL
 //! while computing, and turns any panic into a `RuntimeError`.
 
+use std::sync::Mutex;
+
 use numpy::ndarray::Axis;
-use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods};
+use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArray};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use reynoldsflow_host::cli::dataset;
+use reynoldsflow_host::cli::shard::Shard;
 use reynoldsflow_host::cli::status::Record;
 use reynoldsflow_host::fixed_engine::FrameEngine;
-use reynoldsflow_host::outputs::{PairFields, flo};
+use reynoldsflow_host::outputs::{OutputSpec, PairFields, flo};
+use reynoldsflow_host::pipeline::Compute;
+use reynoldsflow_host::sequence::sampled::{self, FramePlan};
+use reynoldsflow_host::sequence::{Frame, FrameSource};
 use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic, workers};
 
 mod errors;
 mod frames;
 mod settings;
 
-use errors::{Failure, guarded, value_error};
+use errors::{Failure, guarded, host_error, value_error};
 use frames::{Frames, gray};
-use settings::{Kwargs, Settings};
+use settings::{Kwargs, Layout, Settings};
 
 /// The mean length of `v_R = v_c + v_d` over the frame, in pixels per
-/// frame: how much the pair moves (0 for identical frames).
+/// frame: how much the pair moves (0 for identical frames); the host's
+/// definition, which WebDataset samples record too.
 fn mean_speed(planes: &FlowPlanes) -> f64 {
-    let (x, y) = planes.v_r();
-    let sum: f64 = x.iter().zip(&y).map(|(x, y)| x.hypot(*y)).sum();
-    sum / x.len() as f64
+    planes.mean_speed()
+}
+
+/// The `--variant` image of one pair in `layout`, with the pair's motion
+/// score when `score` is asked (which needs the fields); otherwise the
+/// bytes alone, as `run` computes them when it writes images only.
+fn pair_image(
+    compute: &Compute,
+    spec: &OutputSpec,
+    engine: &mut FrameEngine,
+    (prev, next): (&Gray, &Gray),
+    layout: Layout,
+    score: bool,
+) -> Result<(Vec<u8>, f64), HostError> {
+    let (h, w) = (prev.height, prev.width);
+    let (image, motion) = if score || spec.image_needs_fields() {
+        let fields = compute.pair_with(engine, prev, next)?;
+        (spec.image(&fields), mean_speed(&fields.planes))
+    } else {
+        let mut rgb = Vec::new();
+        compute.representation(engine, prev, next, &mut rgb)?;
+        spec.arrange(&mut rgb);
+        (rgb, 0.0)
+    };
+    Ok((settings::arrange(image, h, w, layout), motion))
 }
 
 /// An array of `shape` owning `data` (no copy).
@@ -93,7 +122,9 @@ fn represent<'py>(
     let (h, w) = p.frame_shape();
     let fields = compute_pair(py, &settings, &p, &n)?;
     let spec = settings.output_spec();
-    array(py, py.detach(|| spec.image(&fields)), &[h, w, 3])
+    let layout = settings.layout();
+    let image = py.detach(|| settings::arrange(spec.image(&fields), h, w, layout));
+    array(py, image, &layout.shape(None, h, w))
 }
 
 /// fields(prev, next, *, engine="fixed", intensity_scale=1/255, lam=1e-4,
@@ -155,7 +186,8 @@ fn motion_score<'py>(
 }
 
 /// represent_clip(frames, *, keep_count=False, threads=None,
-/// return_scores=False, engine="fixed", scale="minmax", ...)
+/// return_scores=False, step=None, fps=None, source_fps=None, resize=None,
+/// short_side=None, layout="hwc", engine="fixed", scale="minmax", ...)
 ///
 /// Every consecutive pair of a (T, H, W) or (T, H, W, 1) uint8 clip: a
 /// (T - 1, H, W, 3) array whose image i is represent(frames[i],
@@ -164,6 +196,12 @@ fn motion_score<'py>(
 /// (default: every core); the bytes do not depend on it. With
 /// return_scores=True, returns (images, scores): scores[i] is
 /// motion_score(frames[i], frames[i + 1]), float64 of shape (T - 1,).
+///
+/// step=K takes frames 0, K, 2K, ... (pairs (0, K), (K, 2K), ...); fps=F
+/// takes F frames per second of the clip's rate source_fps (frame
+/// floor(k * source_fps / F)); resize=(W, H) or short_side=N resizes the
+/// frames taken first, as `reynoldsflow run --step/--fps/--resize/
+/// --short-side` do. layout="chw" returns (T - 1, 3, H, W).
 #[pyfunction]
 #[pyo3(signature = (frames, **options))]
 fn represent_clip<'py>(
@@ -177,16 +215,20 @@ fn represent_clip<'py>(
         options,
         &[
             settings::IMAGE_KEYS,
-            &["keep_count", "threads", "return_scores"],
+            settings::FRAME_KEYS,
+            &["keep_count", "threads", "return_scores", "source_fps"],
         ]
         .concat(),
     )?;
     let keep_count = kw.flag("keep_count")?;
     let return_scores = kw.flag("return_scores")?;
     let threads = kw.threads()?;
+    let plan = kw.frame_args()?.plan();
+    let source_fps = kw.rate("source_fps")?;
     let settings = Settings::parse(kw)?;
     let compute = settings.compute()?;
     let spec = settings.output_spec();
+    let layout = settings.layout();
     let clip = Frames::clip(frames, "frames")?;
     let (t, (h, w)) = (clip.count(), clip.frame_shape());
     if t < 2 {
@@ -194,21 +236,38 @@ fn represent_clip<'py>(
             "frames holds {t} frame(s); a result needs a pair, so at least 2 (shape (T, H, W), T >= 2)"
         )));
     }
+    if matches!(plan.sampling, sampled::Sampling::Fps(_)) && source_fps.is_none() {
+        return Err(value_error(
+            "represent_clip(): fps needs source_fps, the clip's own frame rate (an array states none)",
+        ));
+    }
+    let picked = plan
+        .picker(source_fps.map(|r| (r.num, r.den)), "frames")
+        .map_err(host_error)?
+        .indices(t);
+    if picked.len() < 2 {
+        return Err(value_error(format!(
+            "frames: step or fps takes {} of its {t} frames; a result needs a pair, so at least 2",
+            picked.len()
+        )));
+    }
+    let (w, h) = plan.size.map_or((w, h), |size| size.of(w, h));
     let view = clip.view();
     let frame_bytes = 3 * h * w;
-    let results = t - 1;
+    let results = picked.len() - 1;
     let (rgb, scores) = py
         .detach(|| {
             guarded(|| {
-                let grays = (0..t)
-                    .map(|i| gray(view.index_axis(Axis(0), i)))
+                let grays = picked
+                    .iter()
+                    .map(|&i| sized(gray(view.index_axis(Axis(0), i))?, &plan))
                     .collect::<Result<Vec<Gray>, HostError>>()?;
                 let mut rgb = vec![0u8; (results + usize::from(keep_count)) * frame_bytes];
                 let mut scores = vec![0.0f64; results];
                 let pairs =
                     workers::map_indices(threads, results, FrameEngine::new, |engine, i| {
-                        let fields = compute.pair_with(engine, &grays[i], &grays[i + 1])?;
-                        Ok::<_, HostError>((spec.image(&fields), mean_speed(&fields.planes)))
+                        let pair = (&grays[i], &grays[i + 1]);
+                        pair_image(&compute, &spec, engine, pair, layout, return_scores)
                     });
                 for (i, pair) in pairs.into_iter().enumerate() {
                     let (image, score) = pair?;
@@ -225,12 +284,29 @@ fn represent_clip<'py>(
             })
         })
         .map_err(Failure::into_pyerr)?;
-    let images = array(py, rgb, &[results + usize::from(keep_count), h, w, 3])?;
+    let count = results + usize::from(keep_count);
+    let images = array(py, rgb, &layout.shape(Some(count), h, w))?;
     if return_scores {
         let scores = PyArray1::from_vec(py, scores);
         Ok((images, scores).into_pyobject(py)?.into_any().unbind())
     } else {
         Ok(images.into_any().unbind())
+    }
+}
+
+/// `frame` at the plan's size (itself when it has none).
+fn sized(frame: Gray, plan: &FramePlan) -> Result<Gray, HostError> {
+    match plan.size {
+        Some(size) if size.of(frame.width, frame.height) != frame.size() => {
+            let mut out = Gray {
+                width: 0,
+                height: 0,
+                pixels: Vec::new(),
+            };
+            sampled::resize_gray(&frame, size, &mut out)?;
+            Ok(out)
+        }
+        _ => Ok(frame),
     }
 }
 
@@ -246,6 +322,8 @@ struct Stream {
     height: usize,
     settings: Settings,
     prev: Option<Gray>,
+    /// Reused from pair to pair.
+    engine: Mutex<FrameEngine>,
 }
 
 #[pymethods]
@@ -270,6 +348,7 @@ impl Stream {
             height,
             settings,
             prev: None,
+            engine: Mutex::new(FrameEngine::new()),
         })
     }
 
@@ -293,15 +372,21 @@ impl Stream {
         }
         let compute = self.settings.compute()?;
         let spec = self.settings.output_spec();
+        let layout = self.settings.layout();
         let view = f.view();
         let prev = self.prev.take();
+        let engine = &self.engine;
         let (next, image) = py
             .detach(|| {
                 guarded(|| {
                     let next = gray(view)?;
                     let image = match &prev {
                         None => None,
-                        Some(p) => Some(spec.image(&compute.pair(p, &next)?)),
+                        Some(p) => {
+                            let mut engine = engine.lock().expect("no panic holding it");
+                            let pair = (p, &next);
+                            Some(pair_image(&compute, &spec, &mut engine, pair, layout, false)?.0)
+                        }
                     };
                     Ok((next, image))
                 })
@@ -311,9 +396,8 @@ impl Stream {
                 e.into_pyerr()
             })?;
         self.prev = Some(next);
-        image
-            .map(|rgb| array(py, rgb, &[self.height, self.width, 3]))
-            .transpose()
+        let shape = layout.shape(None, self.height, self.width);
+        image.map(|rgb| array(py, rgb, &shape)).transpose()
     }
 
     /// Forget the previous frame: the next push returns None.
@@ -344,13 +428,18 @@ fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>>
     d.set_item("outputs", r.outputs)?;
     d.set_item("seconds", r.seconds)?;
     d.set_item("error", &r.error)?;
+    if let Some(used) = &r.source_frames {
+        d.set_item("source_frames", used.clone())?;
+    }
     Ok(d)
 }
 
 /// convert(src, dst, *, rep=True, viz=False, hsv_max=None, npy=None,
-/// flo=None, keep_count=False, max_frames=None, threads=None, force=False,
-/// engine="fixed", scale="minmax", intensity_scale=1/255, lam=1e-4,
-/// tile=None, variant="dc") -> dict
+/// npy_dtype=None, flo=None, image_format=None, jpeg_quality=None,
+/// keep_count=False, max_frames=None, step=None, fps=None, resize=None,
+/// short_side=None, threads=None, force=False, engine="fixed",
+/// scale="minmax", intensity_scale=1/255, lam=1e-4, tile=None,
+/// variant="dc") -> dict
 ///
 /// One video or frame folder `src` into the folder `dst`, exactly as
 /// `reynoldsflow dataset` makes each item: the same files, and the marker
@@ -359,7 +448,11 @@ fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>>
 /// record {"path", "output", "status", "frames", "outputs", "seconds",
 /// "error"}, status one of "done", "skipped", "failed"; an input that
 /// cannot be read is a "failed" record (with the reason in "error"), a bad
-/// option raises.
+/// option raises. npy_dtype, image_format, jpeg_quality, step, fps,
+/// resize and short_side are the command line's flags of the same names
+/// (npy_dtype="f16", image_format="jpg", step=2, fps=10, resize=(W, H),
+/// short_side=N); with step or fps the record also has "source_frames",
+/// the input index of every frame used.
 #[pyfunction]
 #[pyo3(signature = (src, dst, **options))]
 fn convert<'py>(
@@ -376,20 +469,29 @@ fn convert<'py>(
     record_dict(py, &record)
 }
 
-/// dataset_items(src, *, files_from=None, dst=None) -> list[tuple[str, str]]
+/// dataset_items(src, *, files_from=None, dst=None, shard=None) -> list[tuple[str, str]]
 ///
 /// The items `reynoldsflow dataset SRC DST` would make, in its order: (the
 /// video or frame folder, its output folder relative to DST). With
 /// files_from, those of that manifest (one path relative to src per line);
-/// with dst inside src, dst is not searched.
+/// with dst inside src, dst is not searched. With shard=(i, n), only those
+/// `reynoldsflow dataset --shard i/n` takes (the same hash of each item's
+/// path relative to src, computed by the same code).
 #[pyfunction]
-#[pyo3(signature = (src, *, files_from=None, dst=None))]
+#[pyo3(signature = (src, *, files_from=None, dst=None, shard=None))]
 fn dataset_items(
     py: Python<'_>,
     src: std::path::PathBuf,
     files_from: Option<std::path::PathBuf>,
     dst: Option<std::path::PathBuf>,
+    shard: Option<(u64, u64)>,
 ) -> PyResult<Vec<(String, String)>> {
+    let shard = match shard {
+        None => Shard::ALL,
+        Some((index, count)) => Shard::new(index, count).map_err(|e| {
+            value_error(format!("dataset_items(): shard = ({index}, {count}): {e}"))
+        })?,
+    };
     let items = py
         .detach(|| {
             guarded(|| match &files_from {
@@ -403,8 +505,113 @@ fn dataset_items(
         .map_err(Failure::into_pyerr)?;
     Ok(items
         .into_iter()
+        .filter(|i| shard.contains(&dataset::shard_key(&src, i)))
         .map(|i| (i.src.display().to_string(), i.rel.display().to_string()))
         .collect())
+}
+
+/// read_frames(path, *, step=None, fps=None, resize=None, short_side=None,
+/// max_frames=None) -> FrameReader
+///
+/// The frames of a video (Y4M, or anything ffmpeg decodes) or frame
+/// folder, read one at a time as `reynoldsflow dataset` reads an item, with
+/// `--step`/`--fps`/`--resize`/`--short-side` applied: an iterator of
+/// (index, frame), index the frame's position in the input and frame an
+/// (H, W) uint8 array. max_frames counts the frames taken.
+#[pyfunction]
+#[pyo3(signature = (path, **options))]
+fn read_frames(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<FrameReader> {
+    let mut kw = Kwargs::new(
+        py,
+        "read_frames",
+        options,
+        &[settings::FRAME_KEYS, &["max_frames"]].concat(),
+    )?;
+    let plan = kw.frame_args()?.plan();
+    let max_frames = kw.max_frames()?;
+    kw.done()?;
+    let source = py
+        .detach(|| guarded(|| dataset::open_item(&path, path.is_dir(), &plan)))
+        .map_err(Failure::into_pyerr)?;
+    Ok(FrameReader {
+        source: Mutex::new(Some(source)),
+        left: max_frames,
+    })
+}
+
+/// The frames of one video or frame folder (read_frames).
+#[pyclass(module = "reynoldsflow")]
+struct FrameReader {
+    /// `None` once the input has ended (or failed).
+    source: Mutex<Option<Box<dyn FrameSource>>>,
+    /// Frames still to give, with max_frames.
+    left: Option<u64>,
+}
+
+#[pymethods]
+impl FrameReader {
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(
+        &mut self,
+        py: Python<'py>,
+    ) -> PyResult<Option<(usize, Bound<'py, PyArrayDyn<u8>>)>> {
+        if self.left == Some(0) {
+            *self.source.lock().expect("no panic holding it") = None;
+            return Ok(None);
+        }
+        let source = &self.source;
+        let frame = py
+            .detach(|| {
+                guarded(|| {
+                    let mut source = source.lock().expect("no panic holding it");
+                    let Some(frames) = source.as_mut() else {
+                        return Ok(None);
+                    };
+                    let next: Result<Option<Frame>, HostError> = frames.next_frame();
+                    if !matches!(next, Ok(Some(_))) {
+                        *source = None;
+                    }
+                    next
+                })
+            })
+            .map_err(Failure::into_pyerr)?;
+        let Some(frame) = frame else {
+            return Ok(None);
+        };
+        if let Some(left) = &mut self.left {
+            *left -= 1;
+        }
+        let (w, h) = frame.gray.size();
+        Ok(Some((frame.index, array(py, frame.gray.pixels, &[h, w])?)))
+    }
+
+    /// The frame rate of the frames given `(num, den)` per second, when
+    /// the input states one (None once it has ended).
+    #[getter]
+    fn frame_rate(&self) -> Option<(u32, u32)> {
+        self.source
+            .lock()
+            .expect("no panic holding it")
+            .as_ref()
+            .and_then(|s| s.frame_rate())
+    }
+}
+
+/// _as_ndarray(obj) -> numpy.ndarray
+///
+/// The array view every function reads `obj` through: itself for an
+/// ndarray, a view of the same memory for an object with __dlpack__ or the
+/// array interface (for tests of the no-copy path).
+#[pyfunction]
+fn _as_ndarray<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyUntypedArray>> {
+    frames::ndarray(obj, "obj")
 }
 
 /// read_flo(path) -> (H, W, 2) float32
@@ -466,6 +673,9 @@ fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(represent_clip, m)?)?;
     m.add_function(wrap_pyfunction!(convert, m)?)?;
     m.add_function(wrap_pyfunction!(dataset_items, m)?)?;
+    m.add_function(wrap_pyfunction!(read_frames, m)?)?;
+    m.add_function(wrap_pyfunction!(_as_ndarray, m)?)?;
+    m.add_class::<FrameReader>()?;
     m.add_function(wrap_pyfunction!(read_flo, m)?)?;
     m.add_function(wrap_pyfunction!(write_flo, m)?)?;
     m.add_class::<Stream>()?;

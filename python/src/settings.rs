@@ -6,10 +6,11 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyString, PyTuple};
 use reynoldsflow_core::IntensityScale;
-use reynoldsflow_host::cli::run::{ComputeArgs, EngineArgs, OutputArgs};
+use reynoldsflow_host::cli::run::{ComputeArgs, EngineArgs, FrameArgs, OutputArgs};
 use reynoldsflow_host::cli::values::{self, EngineKind, ScaleArg, TileSize};
-use reynoldsflow_host::outputs::{self, Fields, OutputSpec, Variant};
+use reynoldsflow_host::outputs::{self, Fields, ImageFormatName, NpyDtype, OutputSpec, Variant};
 use reynoldsflow_host::pipeline::Compute;
+use reynoldsflow_host::sequence::sampled::{self, Rate};
 
 use crate::errors::{host_error, value_error};
 
@@ -17,13 +18,24 @@ use crate::errors::{host_error, value_error};
 const FIELD_KEYS: &[&str] = &["engine", "intensity_scale", "lam", "tile"];
 
 /// The keywords of the functions that make images.
-pub const IMAGE_KEYS: &[&str] = &["scale", "variant", "hsv_max"];
+pub const IMAGE_KEYS: &[&str] = &["scale", "variant", "hsv_max", "layout"];
+
+/// The keywords that pick and resize frames (`--step`, `--fps`,
+/// `--resize`, `--short-side`).
+pub const FRAME_KEYS: &[&str] = &["resize", "short_side", "step", "fps"];
 
 /// `convert`'s own keywords.
 pub const CONVERT_KEYS: &[&str] = &[
     "scale",
     "variant",
     "hsv_max",
+    "resize",
+    "short_side",
+    "step",
+    "fps",
+    "npy_dtype",
+    "image_format",
+    "jpeg_quality",
     "rep",
     "viz",
     "npy",
@@ -96,6 +108,88 @@ impl<'py> Kwargs<'py> {
         Ok(self.get::<bool>(key)?.unwrap_or(false))
     }
 
+    /// `resize`, `short_side`, `step`, `fps` as the command line's flags.
+    pub fn frame_args(&mut self) -> PyResult<FrameArgs> {
+        let function = self.function;
+        let bad = |key: &str, e: String| value_error(format!("{function}(): {key}: {e}"));
+        let resize = match self.take("resize")? {
+            None => None,
+            Some(v) => {
+                let text = if let Ok(s) = v.cast::<PyString>() {
+                    s.to_cow()?.into_owned()
+                } else {
+                    let (w, h): (i64, i64) = v.extract().map_err(|_| {
+                        PyTypeError::new_err(format!(
+                            "{function}(): resize: expected (width, height) or 'WxH'"
+                        ))
+                    })?;
+                    format!("{w}x{h}")
+                };
+                Some(sampled::parse_resize(&text).map_err(|e| bad("resize", e))?)
+            }
+        };
+        let short_side = self
+            .get::<i64>("short_side")?
+            .map(|n| sampled::parse_short_side(&n.to_string()).map_err(|e| bad("short_side", e)))
+            .transpose()?;
+        let step = match self.get::<i64>("step")? {
+            None => None,
+            Some(k) if k >= 1 => Some(k as u64),
+            Some(k) => return Err(bad("step", format!("{k}; expected at least 1"))),
+        };
+        let fps = self
+            .take("fps")?
+            .map(|v| rate(&v).map_err(|e| bad("fps", e)))
+            .transpose()?;
+        if resize.is_some() && short_side.is_some() {
+            return Err(value_error(format!(
+                "{function}(): give resize or short_side, not both"
+            )));
+        }
+        if step.is_some() && fps.is_some() {
+            return Err(value_error(format!(
+                "{function}(): give step or fps, not both"
+            )));
+        }
+        Ok(FrameArgs {
+            resize,
+            short_side,
+            step,
+            fps,
+        })
+    }
+
+    /// No keyword may be left (for functions without [`Settings`]).
+    pub fn done(self) -> PyResult<()> {
+        match self.dict.keys().iter().next() {
+            Some(key) => Err(PyTypeError::new_err(format!(
+                "{}() got an unexpected keyword argument {key}",
+                self.function
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// `max_frames`: at least 1, or None.
+    pub fn max_frames(&mut self) -> PyResult<Option<u64>> {
+        match self.get::<i64>("max_frames")? {
+            None => Ok(None),
+            Some(n) if n >= 1 => Ok(Some(n as u64)),
+            Some(n) => Err(value_error(format!(
+                "{}(): max_frames = {n}; expected at least 1",
+                self.function
+            ))),
+        }
+    }
+
+    /// A frame rate keyword (`source_fps`).
+    pub fn rate(&mut self, key: &str) -> PyResult<Option<Rate>> {
+        let function = self.function;
+        self.take(key)?
+            .map(|v| rate(&v).map_err(|e| value_error(format!("{function}(): {key}: {e}"))))
+            .transpose()
+    }
+
     /// `threads`: at least 1, default every core.
     pub fn threads(&mut self) -> PyResult<usize> {
         match self.get::<i64>("threads")? {
@@ -109,11 +203,63 @@ impl<'py> Kwargs<'py> {
     }
 }
 
+/// A rate: a number, a `fractions.Fraction`, or a string such as
+/// `"30000/1001"`, as `--fps` parses it.
+fn rate(value: &Bound<'_, PyAny>) -> Result<Rate, String> {
+    let text = if let Ok(s) = value.cast::<PyString>() {
+        s.to_cow().map_err(|e| e.to_string())?.into_owned()
+    } else if let (Ok(n), Ok(d)) = (value.getattr("numerator"), value.getattr("denominator")) {
+        format!("{n}/{d}")
+    } else {
+        value.str().map_err(|e| e.to_string())?.to_string()
+    };
+    sampled::parse_rate(&text)
+}
+
+/// The memory layout of returned images.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Layout {
+    /// `(..., H, W, 3)`, as NumPy, OpenCV and PIL hold images.
+    #[default]
+    Hwc,
+    /// `(..., 3, H, W)`, channels first, as torchvision's tensors.
+    Chw,
+}
+
+/// `rgb` (`h × w` RGB8 pixels) in `layout`: itself, or its three planes.
+pub fn arrange(rgb: Vec<u8>, h: usize, w: usize, layout: Layout) -> Vec<u8> {
+    match layout {
+        Layout::Hwc => rgb,
+        Layout::Chw => {
+            let n = h * w;
+            let mut out = vec![0u8; 3 * n];
+            for (i, p) in rgb.chunks_exact(3).enumerate() {
+                out[i] = p[0];
+                out[n + i] = p[1];
+                out[2 * n + i] = p[2];
+            }
+            out
+        }
+    }
+}
+
+impl Layout {
+    /// The shape of `count` images (or one, for `None`) of `h × w`.
+    pub fn shape(self, count: Option<usize>, h: usize, w: usize) -> Vec<usize> {
+        let one = match self {
+            Layout::Hwc => [h, w, 3],
+            Layout::Chw => [3, h, w],
+        };
+        count.into_iter().chain(one).collect()
+    }
+}
+
 /// The checked engine, parameters and image of a call.
 pub struct Settings {
     compute: ComputeArgs,
     variant: Variant,
     hsv_max: Option<f64>,
+    layout: Layout,
 }
 
 fn parse_engine(name: &str) -> PyResult<EngineKind> {
@@ -259,6 +405,15 @@ impl Settings {
         if hsv_max.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
             return Err(value_error("hsv_max: expected a positive number of pixels"));
         }
+        let layout = match kw.get::<String>("layout")?.as_deref() {
+            None | Some("hwc") => Layout::Hwc,
+            Some("chw") => Layout::Chw,
+            Some(other) => {
+                return Err(value_error(format!(
+                    "layout = '{other}'; expected 'hwc' ((H, W, 3), the default) or 'chw' ((3, H, W), channels first as torchvision)"
+                )));
+            }
+        };
         if let Some(key) = kw.dict.keys().iter().next() {
             return Err(PyTypeError::new_err(format!(
                 "{}() got an unexpected keyword argument {key}",
@@ -275,9 +430,15 @@ impl Settings {
             },
             variant,
             hsv_max,
+            layout,
         };
         settings.compute()?;
         Ok(settings)
+    }
+
+    /// The layout of returned images.
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
     /// The host's computation, checked as `reynoldsflow pair` checks it.
@@ -337,6 +498,37 @@ pub fn convert_args(mut kw: Kwargs<'_>) -> PyResult<(EngineArgs, OutputArgs, boo
     };
     let threads = kw.threads()? as u32;
     let force = kw.flag("force")?;
+    let frames = kw.frame_args()?;
+    let npy_dtype = match kw.get::<String>("npy_dtype")?.as_deref() {
+        None => None,
+        Some("f64" | "float64") => Some(NpyDtype::F64),
+        Some("f32" | "float32") => Some(NpyDtype::F32),
+        Some("f16" | "float16") => Some(NpyDtype::F16),
+        Some(other) => {
+            return Err(value_error(format!(
+                "npy_dtype = '{other}'; expected 'f16', 'f32' or 'f64'"
+            )));
+        }
+    };
+    let image_format = match kw.get::<String>("image_format")?.as_deref() {
+        None => None,
+        Some("png") => Some(ImageFormatName::Png),
+        Some("jpg" | "jpeg") => Some(ImageFormatName::Jpg),
+        Some(other) => {
+            return Err(value_error(format!(
+                "image_format = '{other}'; expected 'png' or 'jpg'"
+            )));
+        }
+    };
+    let jpeg_quality = match kw.get::<i64>("jpeg_quality")? {
+        None => None,
+        Some(q @ 1..=100) => Some(q as u8),
+        Some(q) => {
+            return Err(value_error(format!(
+                "jpeg_quality = {q}; expected 1 to 100"
+            )));
+        }
+    };
     let settings = Settings::parse(kw)?;
     let engine = EngineArgs {
         compute: settings.compute,
@@ -348,9 +540,19 @@ pub fn convert_args(mut kw: Kwargs<'_>) -> PyResult<(EngineArgs, OutputArgs, boo
         viz,
         hsv_max: settings.hsv_max,
         npy,
+        npy_dtype,
         flo,
+        image_format,
+        jpeg_quality,
         keep_count,
         max_frames,
+        frames,
     };
+    if output.npy_dtype.is_some() && output.npy.is_none() {
+        return Err(value_error(
+            "npy_dtype applies to npy; give npy=True (or field names)",
+        ));
+    }
+    output.check_types(false).map_err(host_error)?;
     Ok((engine, output, force))
 }

@@ -2,8 +2,11 @@
 and their RGB representation [|v_d|, |v_c|, frame n], computed by the same
 code as the ``reynoldsflow`` command line (the same bytes).
 
-Frames are 8-bit gray NumPy arrays of shape (H, W) or (H, W, 1), any
-strides. A wrong type, dtype or number of dimensions raises ``TypeError``;
+Frames are 8-bit gray arrays of shape (H, W) or (H, W, 1), any strides:
+NumPy arrays, or CPU arrays of other libraries that export ``__dlpack__``
+or the array interface (PyTorch tensors, ...), read in place without a
+copy. ``reynoldsflow.torch`` (with PyTorch installed) has a transform and
+an ``IterableDataset``. A wrong type, dtype or number of dimensions raises ``TypeError``;
 a wrong shape or parameter value ``ValueError``; a file that cannot be
 read ``OSError`` (``FileNotFoundError``, ...). The GIL is released while
 computing, so threads compute in parallel.
@@ -31,6 +34,7 @@ Options shared by the computing functions (all keyword-only):
 # The compiled module (Rust, PyO3), re-exported whole: `reynoldsflow.X` is
 # `reynoldsflow._native.X`. Its types are in _native.pyi.
 from ._native import (
+    FrameReader as FrameReader,
     Stream as Stream,
     __version__ as __version__,
     convert as convert,
@@ -38,18 +42,21 @@ from ._native import (
     fields as fields,
     motion_score as motion_score,
     read_flo as read_flo,
+    read_frames as read_frames,
     represent as represent,
     represent_clip as represent_clip,
     write_flo as write_flo,
 )
 
 __all__ = [
+    "FrameReader",
     "Stream",
     "convert",
     "dataset_items",
     "fields",
     "motion_score",
     "read_flo",
+    "read_frames",
     "represent",
     "represent_clip",
     "write_flo",

@@ -3,7 +3,9 @@ docstring (`reynoldsflow/__init__.py`) documents the options they share."""
 
 from os import PathLike
 from fractions import Fraction
-from typing import Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Iterator, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+
+from typing_extensions import NotRequired
 
 import numpy as np
 import numpy.typing as npt
@@ -14,6 +16,11 @@ Engine = Literal["fixed", "float"]
 Scale = Union[str, Tuple[float, float]]
 IntensityScale = Union[float, Fraction, Tuple[int, int], str]
 Variant = Literal["dc", "dc0", "cd", "hsv"]
+Layout = Literal["hwc", "chw"]
+Rate = Union[int, float, Fraction, str]
+Size = Union[Tuple[int, int], str]
+# An (H, W) or (H, W, 1) uint8 array: a NumPy array, or any CPU array that
+# exports __dlpack__ or the array interface (a torch tensor), read in place.
 Frame = npt.NDArray[np.uint8]
 Path = Union[str, PathLike[str]]
 
@@ -28,10 +35,12 @@ def represent(
     tile: Optional[Tuple[int, int]] = None,
     variant: Variant = "dc",
     hsv_max: Optional[float] = None,
+    layout: Layout = "hwc",
 ) -> npt.NDArray[np.uint8]:
     """The ReynoldsFlow representation of a frame pair: an (H, W, 3) uint8
     image [|v_d|, |v_c|, prev] (variant "dc"), byte for byte what
-    ``reynoldsflow pair`` writes to rep.png."""
+    ``reynoldsflow pair`` writes to rep.png; layout="chw" gives (3, H, W),
+    channels first as torchvision."""
 
 class Fields(TypedDict):
     v_c: npt.NDArray[np.float32]
@@ -74,6 +83,12 @@ def represent_clip(
     keep_count: bool = False,
     threads: Optional[int] = None,
     return_scores: Literal[False] = False,
+    step: Optional[int] = None,
+    fps: Optional[Rate] = None,
+    source_fps: Optional[Rate] = None,
+    resize: Optional[Size] = None,
+    short_side: Optional[int] = None,
+    layout: Layout = "hwc",
     engine: Engine = "fixed",
     scale: Scale = "minmax",
     intensity_scale: IntensityScale = ...,
@@ -89,6 +104,12 @@ def represent_clip(
     keep_count: bool = False,
     threads: Optional[int] = None,
     return_scores: Literal[True],
+    step: Optional[int] = None,
+    fps: Optional[Rate] = None,
+    source_fps: Optional[Rate] = None,
+    resize: Optional[Size] = None,
+    short_side: Optional[int] = None,
+    layout: Layout = "hwc",
     engine: Engine = "fixed",
     scale: Scale = "minmax",
     intensity_scale: IntensityScale = ...,
@@ -102,7 +123,13 @@ def represent_clip(
     represent(frames[i], frames[i + 1]); with keep_count=True, (T, H, W, 3),
     the last image repeated so every frame has one. Pairs run on ``threads``
     workers (default: every core); the bytes do not depend on it. With
-    return_scores=True, also the float64 (T - 1,) motion_score of each pair."""
+    return_scores=True, also the float64 (T - 1,) motion_score of each pair.
+
+    step=K takes frames 0, K, 2K, ... (pairs (0, K), (K, 2K), ...); fps=F
+    takes F frames per second of the clip's rate source_fps (frame
+    floor(k * source_fps / F)); resize=(W, H) or short_side=N resizes the
+    frames taken, as ``reynoldsflow run --step/--fps/--resize/--short-side``
+    do (docs/resample.md). layout="chw" gives (T - 1, 3, H, W)."""
 
 class Stream:
     """Frames pushed one at a time (a camera, a decoder): push(frame)
@@ -121,6 +148,7 @@ class Stream:
         tile: Optional[Tuple[int, int]] = None,
         variant: Variant = "dc",
         hsv_max: Optional[float] = None,
+        layout: Layout = "hwc",
     ) -> None: ...
     def push(self, frame: Frame) -> Optional[npt.NDArray[np.uint8]]:
         """The (height, width, 3) representation of (previous frame, frame),
@@ -140,6 +168,8 @@ class Record(TypedDict):
     outputs: Optional[int]
     seconds: float
     error: Optional[str]
+    # With step or fps: the input index of every frame used.
+    source_frames: NotRequired[list[int]]
 
 def convert(
     src: Path,
@@ -149,9 +179,16 @@ def convert(
     viz: bool = False,
     hsv_max: Optional[float] = None,
     npy: Union[None, bool, str, Sequence[str]] = None,
+    npy_dtype: Literal["f16", "f32", "f64"] = "f64",
     flo: Union[None, bool, str, Sequence[str]] = None,
+    image_format: Literal["png", "jpg"] = "png",
+    jpeg_quality: int = 95,
     keep_count: bool = False,
     max_frames: Optional[int] = None,
+    step: Optional[int] = None,
+    fps: Optional[Rate] = None,
+    resize: Optional[Size] = None,
+    short_side: Optional[int] = None,
     threads: Optional[int] = None,
     force: bool = False,
     engine: Engine = "fixed",
@@ -166,20 +203,49 @@ def convert(
     plus the marker .reynoldsflow-done, written last): a finished item is
     skipped when run again with the same options; force=True redoes it.
     npy=True writes v_c, v_d and v_R as .npy (or name them: "v_R" or
-    ["v_c", "v_R"]); flo=True writes v_R as .flo. Returns the status record;
-    an input that cannot be read gives status "failed" with the reason in
-    "error"; a bad option raises."""
+    ["v_c", "v_R"]); flo=True writes v_R as .flo. npy_dtype, image_format,
+    jpeg_quality, step, fps, resize and short_side are the command line's
+    flags of the same names. Returns the status record; an input that
+    cannot be read gives status "failed" with the reason in "error"; a bad
+    option raises."""
 
 def dataset_items(
     src: Path,
     *,
     files_from: Optional[Path] = None,
     dst: Optional[Path] = None,
+    shard: Optional[Tuple[int, int]] = None,
 ) -> list[Tuple[str, str]]:
     """The items ``reynoldsflow dataset SRC DST`` makes, in its order:
     (video file or frame folder, its output folder relative to DST). With
     files_from, those of that manifest (one path relative to src per line);
-    a dst inside src is not searched."""
+    a dst inside src is not searched. With shard=(i, n), only the items
+    ``reynoldsflow dataset --shard i/n`` takes (the same hash)."""
+
+class FrameReader:
+    """The frames of one video or frame folder (read_frames): an iterator
+    of (index in the input, (H, W) uint8 frame)."""
+
+    def __iter__(self) -> Iterator[Tuple[int, npt.NDArray[np.uint8]]]: ...
+    def __next__(self) -> Tuple[int, npt.NDArray[np.uint8]]: ...
+    @property
+    def frame_rate(self) -> Optional[Tuple[int, int]]:
+        """Frames per second of the frames given, (num, den), when the
+        input states a rate (None for frame folders, or once ended)."""
+
+def read_frames(
+    path: Path,
+    *,
+    step: Optional[int] = None,
+    fps: Optional[Rate] = None,
+    resize: Optional[Size] = None,
+    short_side: Optional[int] = None,
+    max_frames: Optional[int] = None,
+) -> FrameReader:
+    """The frames of a video (Y4M, or anything ffmpeg decodes) or frame
+    folder, one at a time, as ``reynoldsflow dataset`` reads an item, with
+    step, fps, resize and short_side applied; max_frames counts the frames
+    taken."""
 
 def read_flo(path: Path) -> npt.NDArray[np.float32]:
     """A Middlebury .flo file as an (H, W, 2) float32 array, last axis (u, v)."""

@@ -1,0 +1,215 @@
+"""PyTorch: ReynoldsFlow as a transform and as an ``IterableDataset``.
+
+Imported on its own (``import reynoldsflow.torch``), only where PyTorch is
+installed; ``import reynoldsflow`` never imports torch. Tensors are uint8,
+channels first (``(3, H, W)``, as torchvision's), and hold the bytes
+``reynoldsflow run`` writes.
+
+- :class:`ReynoldsFlow`: a transform from a ``(T, H, W)`` or
+  ``(T, 1, H, W)`` uint8 clip to its ``(T - 1, 3, H, W)`` representations.
+- :class:`ReynoldsFlowDataset`: the representations of a tree of videos and
+  frame folders (or one video, or a manifest), read as ``reynoldsflow
+  dataset`` reads them, per pair or per clip. The items are split across
+  ``DataLoader`` workers and ``torch.distributed`` ranks by the hash of
+  ``reynoldsflow dataset --shard``, so every pair is yielded exactly once.
+
+N frames give N - 1 results; result n is the pair (frame n, frame n + 1)
+of the frames taken (``step``/``fps`` take frames 0, K, 2K, ...).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
+
+try:
+    import torch
+    from torch.utils.data import IterableDataset, get_worker_info
+except ImportError as e:  # pragma: no cover - exercised without torch only
+    raise ImportError(
+        "reynoldsflow.torch needs PyTorch (pip install torch); "
+        "the rest of reynoldsflow works without it"
+    ) from e
+
+import numpy
+
+import reynoldsflow as _rf
+
+__all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "shard_of_this_process"]
+
+# The keywords of the frames taken (read_frames / represent_clip).
+_FRAME_KEYS = ("step", "fps", "resize", "short_side")
+
+
+def _threads_here(threads: Optional[int]) -> Optional[int]:
+    """Inside a DataLoader worker, one thread unless told otherwise: the
+    workers are the parallelism, and more threads than cores only contend."""
+    if threads is None and get_worker_info() is not None:
+        return 1
+    return threads
+
+
+class ReynoldsFlow:
+    """A transform: a ``(T, H, W)`` or ``(T, 1, H, W)`` uint8 CPU tensor of
+    gray frames to the ``(T - 1, 3, H, W)`` uint8 tensor of its consecutive
+    pairs' representations (``keep_count=True``: ``(T, 3, H, W)``, the last
+    one repeated).
+
+    Keywords are ``reynoldsflow.represent_clip``'s (``engine``, ``scale``,
+    ``variant``, ``step``, ``resize``, ...). ``threads`` defaults to every
+    core in the main process and to 1 inside a ``DataLoader`` worker. The
+    input is read in place (no copy) whatever its strides.
+    """
+
+    def __init__(self, *, threads: Optional[int] = None, **options: Any) -> None:
+        if "layout" in options:
+            raise TypeError("ReynoldsFlow() returns channels first; it takes no layout")
+        self.threads = threads
+        self.options = options
+
+    def __call__(self, frames: "torch.Tensor") -> "torch.Tensor":
+        if not isinstance(frames, torch.Tensor):
+            raise TypeError(f"ReynoldsFlow: expected a torch.Tensor, got {type(frames).__name__}")
+        if frames.dim() == 4:
+            if frames.shape[1] != 1:
+                raise ValueError(
+                    f"ReynoldsFlow: a 4-D clip must be (T, 1, H, W) (one gray channel); "
+                    f"got shape {tuple(frames.shape)}"
+                )
+            frames = frames[:, 0]
+        elif frames.dim() != 3:
+            raise TypeError(
+                f"ReynoldsFlow: expected a (T, H, W) or (T, 1, H, W) clip, got {frames.dim()} dimensions"
+            )
+        if frames.dtype != torch.uint8:
+            raise TypeError(f"ReynoldsFlow: expected a uint8 clip, got {frames.dtype}")
+        reps = _rf.represent_clip(
+            frames, layout="chw", threads=_threads_here(self.threads), **self.options
+        )
+        return torch.from_numpy(reps)
+
+    def __repr__(self) -> str:
+        options = ", ".join(f"{k}={v!r}" for k, v in sorted(self.options.items()))
+        return f"ReynoldsFlow({options})"
+
+
+def shard_of_this_process(
+    rank: Optional[int] = None, world_size: Optional[int] = None
+) -> Tuple[int, int]:
+    """``(index, count)`` of the shard this process reads: one shard per
+    ``DataLoader`` worker of every rank, ``index = rank * workers + worker``.
+    ``rank`` and ``world_size`` default to ``torch.distributed``'s when it
+    is initialised, else 0 and 1."""
+    if (rank is None) != (world_size is None):
+        raise ValueError("give rank and world_size together, or neither")
+    if rank is None:
+        dist = torch.distributed
+        if dist.is_available() and dist.is_initialized():
+            rank, world_size = dist.get_rank(), dist.get_world_size()
+        else:
+            rank, world_size = 0, 1
+    assert world_size is not None
+    if not 0 <= rank < world_size:
+        raise ValueError(f"rank {rank} is not in 0..{world_size - 1} (world_size {world_size})")
+    info = get_worker_info()
+    workers, worker = (info.num_workers, info.id) if info is not None else (1, 0)
+    return rank * workers + worker, world_size * workers
+
+
+class ReynoldsFlowDataset(IterableDataset):
+    """The representations of the videos and frame folders under ``src``
+    (a folder tree, one video or one frame folder; with ``files_from``, the
+    items that manifest lists, one path relative to ``src`` per line), read
+    in the order and with the frames of ``reynoldsflow dataset SRC``.
+
+    ``per="pair"`` (default) yields ``(rep, meta)`` for each pair: ``rep``
+    a ``(3, H, W)`` uint8 tensor, ``meta`` a dict with ``source`` (the item's
+    path relative to ``src``, as ``--shard`` hashes it), ``path`` and
+    ``frames`` (the input indices of the pair's two frames). ``per="clip"``
+    yields ``(reps, meta)`` per item: ``(T - 1, 3, H, W)`` and ``frames``
+    the indices of all T frames taken. Items with fewer than 2 frames taken
+    yield nothing.
+
+    Each process of a ``DataLoader`` (worker ``w`` of ``W``, rank ``r`` of
+    ``R``) reads shard ``r * W + w`` of ``R * W``: the items whose path
+    hashes there, as ``reynoldsflow dataset --shard``. Shards are disjoint
+    and cover every item, so every pair is yielded exactly once per epoch
+    (not evenly: a shard holds the items the hash gives it). ``rank`` and
+    ``world_size`` default to ``torch.distributed``'s.
+
+    Keywords: ``step``, ``fps``, ``resize``, ``short_side``, ``max_frames``
+    choose the frames (as the command line's flags); the others are
+    ``reynoldsflow.Stream``'s (``engine``, ``scale``, ``variant``, ...).
+    Frames of different sizes do not batch: pass ``resize`` or use
+    ``batch_size=None``.
+    """
+
+    def __init__(
+        self,
+        src: Union[str, "os.PathLike[str]"],
+        *,
+        files_from: Union[None, str, "os.PathLike[str]"] = None,
+        per: str = "pair",
+        rank: Optional[int] = None,
+        world_size: Optional[int] = None,
+        max_frames: Optional[int] = None,
+        **options: Any,
+    ) -> None:
+        super().__init__()
+        if per not in ("pair", "clip"):
+            raise ValueError(f"per = {per!r}; expected 'pair' or 'clip'")
+        if "layout" in options:
+            raise TypeError("ReynoldsFlowDataset() yields channels first; it takes no layout")
+        if (rank is None) != (world_size is None):
+            raise ValueError("give rank and world_size together, or neither")
+        self.src = os.fspath(src)
+        self.files_from = None if files_from is None else os.fspath(files_from)
+        self.per = per
+        self.rank, self.world_size = rank, world_size
+        self.frame_options: Dict[str, Any] = {k: options.pop(k) for k in _FRAME_KEYS if k in options}
+        if max_frames is not None:
+            self.frame_options["max_frames"] = max_frames
+        self.image_options = options
+        # Checked now, in the main process, not first in a worker: a bad
+        # option or a missing src raises here.
+        _rf.Stream(2, 2, **self.image_options)
+        self._items_of((0, 1))
+
+    def _items_of(self, shard: Tuple[int, int]) -> Sequence[Tuple[str, str]]:
+        return _rf.dataset_items(self.src, files_from=self.files_from, shard=shard)
+
+    def _source(self, path: str) -> str:
+        if os.path.isdir(self.src):
+            return os.path.relpath(path, self.src).replace(os.sep, "/")
+        return os.path.basename(path)
+
+    def __iter__(self) -> Iterator[Tuple["torch.Tensor", Dict[str, Any]]]:
+        shard = shard_of_this_process(self.rank, self.world_size)
+        for path, _ in self._items_of(shard):
+            meta = {"source": self._source(path), "path": path}
+            frames = _rf.read_frames(path, **self.frame_options)
+            if self.per == "pair":
+                yield from self._pairs(frames, meta)
+            else:
+                yield from self._clip(frames, meta)
+
+    def _pairs(self, frames: "_rf.FrameReader", meta: Dict[str, Any]) -> Iterator[Any]:
+        stream, prev = None, None
+        for index, frame in frames:
+            if stream is None:
+                h, w = frame.shape
+                stream = _rf.Stream(w, h, layout="chw", **self.image_options)
+            # A frame of another size raises, as `reynoldsflow run` refuses it.
+            rep = stream.push(frame)
+            if rep is not None:
+                yield torch.from_numpy(rep), {**meta, "frames": (prev, index)}
+            prev = index
+
+    def _clip(self, frames: "_rf.FrameReader", meta: Dict[str, Any]) -> Iterator[Any]:
+        taken = list(frames)
+        if len(taken) < 2:
+            return
+        indices = [i for i, _ in taken]
+        clip = numpy.stack([f for _, f in taken])
+        reps = _rf.represent_clip(clip, layout="chw", threads=_threads_here(None), **self.image_options)
+        yield torch.from_numpy(reps), {**meta, "frames": indices}
