@@ -8,7 +8,7 @@ use std::ffi::OsStr;
 use std::fs;
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use run_support::*;
 
@@ -242,18 +242,9 @@ fn resumes_after_being_killed() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    let started = Instant::now();
-    let killed = loop {
-        if tree(&dst).iter().any(|p| p.ends_with(".png")) {
-            child.kill().unwrap();
-            break true;
-        }
-        if child.try_wait().unwrap().is_some() || started.elapsed() > Duration::from_secs(60) {
-            break false;
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    };
-    child.wait().unwrap();
+    let killed = kill_when(&mut child, Duration::from_secs(60), || {
+        tree(&dst).iter().any(|p| p.ends_with(".png"))
+    });
     let done_at_kill = tree(&dst).iter().filter(|p| p.ends_with(MARKER)).count();
     println!(
         "killed mid-run: {killed}; items finished at the kill: {done_at_kill}; files: {}",

@@ -9,7 +9,7 @@ use std::ffi::OsStr;
 use std::fs;
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use run_support::*;
 
@@ -309,20 +309,10 @@ fn a_sigkill_mid_shard_then_a_rerun_gives_the_same_shards() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    let started = Instant::now();
-    let killed = loop {
-        let names = tree(&dst);
-        let complete = names.iter().filter(|n| n.ends_with(".tar")).count();
-        if complete >= 1 && !temp_files(&dst).is_empty() {
-            child.kill().unwrap();
-            break true;
-        }
-        if child.try_wait().unwrap().is_some() || started.elapsed() > Duration::from_secs(120) {
-            break false;
-        }
-        std::thread::sleep(Duration::from_millis(1));
-    };
-    child.wait().unwrap();
+    let killed = kill_when(&mut child, Duration::from_secs(120), || {
+        let complete = tree(&dst).iter().filter(|n| n.ends_with(".tar")).count();
+        complete >= 1 && !temp_files(&dst).is_empty()
+    });
     let left = tree(&dst);
     println!("killed mid-shard: {killed}; left: {left:?}");
     assert!(killed, "the run ended before it could be killed mid-shard");

@@ -23,9 +23,9 @@ import numpy as np
 import reynoldsflow as rf
 
 
-def moving_clip(t: int, w: int, h: int) -> np.ndarray:
+def moving_clip(t: int, w: int, h: int, seed: int = 7) -> np.ndarray:
     y, x = np.mgrid[0:h, 0:w].astype(np.float64)
-    grain = np.random.default_rng(7).integers(-6, 7, size=(h, w))
+    grain = np.random.default_rng(seed).integers(-6, 7, size=(h, w))
     frames = []
     for i in range(t):
         xs, ys = x - 1.5 * i, y - 0.5 * i

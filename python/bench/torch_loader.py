@@ -20,25 +20,16 @@ import time
 from collections import Counter
 from pathlib import Path
 
-import numpy as np
 from torch.utils.data import DataLoader
 
 import reynoldsflow as rf
 from reynoldsflow.torch import ReynoldsFlowDataset
+# The moving texture of the other bench (this folder is on sys.path when
+# a bench runs as a script).
+from throughput import moving_clip
 
 
-def moving_clip(t: int, w: int, h: int, seed: int) -> np.ndarray:
-    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
-    grain = np.random.default_rng(seed).integers(-6, 7, size=(h, w))
-    frames = []
-    for i in range(t):
-        xs, ys = x - 1.5 * i, y - 0.5 * i
-        base = 128 + 60 * np.sin(xs / 5.0) * np.cos(ys / 7.0) + 30 * np.sin((xs + ys) / 11.0)
-        frames.append(np.clip(base + grain, 0, 255).astype(np.uint8))
-    return np.stack(frames)
-
-
-def write_y4m(path: Path, frames: np.ndarray) -> None:
+def write_y4m(path: Path, frames) -> None:
     t, h, w = frames.shape
     with open(path, "wb") as f:
         f.write(b"YUV4MPEG2 W%d H%d F30:1 Ip A1:1 Cmono\n" % (w, h))

@@ -7,7 +7,8 @@ use std::ffi::{OsStr, OsString};
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 use reynoldsflow_host::{Gray, image_io};
 
@@ -247,4 +248,23 @@ pub fn write_pgms(dir: &Path, frames: &[Gray]) -> Vec<PathBuf> {
             p
         })
         .collect()
+}
+
+/// Poll `ready` until it holds, then SIGKILL `child`; give up when the
+/// child ends first or `within` passes. Waits for the child either way;
+/// whether it was killed.
+pub fn kill_when(child: &mut Child, within: Duration, mut ready: impl FnMut() -> bool) -> bool {
+    let started = Instant::now();
+    let killed = loop {
+        if ready() {
+            child.kill().unwrap();
+            break true;
+        }
+        if child.try_wait().unwrap().is_some() || started.elapsed() > within {
+            break false;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    };
+    child.wait().unwrap();
+    killed
 }
