@@ -107,10 +107,11 @@ pub struct DatasetArgs {
     pub status: Option<PathBuf>,
     /// Write WebDataset shards instead of folders: DST/shard-NNNNNN.tar
     /// (shard-IIII-NNNNNN.tar with --shard I/N), one sample per result:
-    /// KEY.rep.png (or .jpg), KEY.<field>.npy / .flo as asked, and
+    /// KEY.rep.png (or .jpg), KEY.FIELD.npy / .flo as asked, and
     /// KEY.json (source path, source frames, motion score, settings); KEY
-    /// is <item path>/<result stem>. Items run one after another, each on
-    /// every thread; a rerun skips the items already in complete shards.
+    /// is ITEM/STEM (the item's output path, the result's stem). Items
+    /// run one after another, each on every thread; a rerun skips the
+    /// items already in complete shards.
     #[arg(long, help_heading = "WebDataset")]
     pub webdataset: bool,
     /// Close a shard once it holds BYTES or more, between items (an item's
