@@ -9,8 +9,8 @@ finished items are skipped on a rerun, by either.
     python ray_dataset.py SRC DST --address auto          # a running cluster
     python ray_dataset.py SRC DST --status status.jsonl --keep-count
 
-Every worker needs `pip install reynoldsflow` (and ffmpeg for videos other
-than .y4m). Prints a summary; the exit status is 1 if any item failed.
+Every worker needs the `reynoldsflow-rs` wheel installed (pip install
+reynoldsflow_rs-*.whl; ffmpeg too for videos other than .y4m). Prints a summary; the exit status is 1 if any item failed.
 """
 
 import argparse

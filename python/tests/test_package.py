@@ -3,6 +3,8 @@ re-exported whole, and its stub declares everything it exports."""
 
 import ast
 import os
+import re
+from importlib.metadata import metadata
 from pathlib import Path
 
 import reynoldsflow as rf
@@ -36,3 +38,13 @@ def test_stub_declares_every_compiled_name():
     # The installed package carries its stub and marker too.
     installed = Path(rf.__file__).parent
     assert (installed / "_native.pyi").is_file() and (installed / "py.typed").is_file()
+
+
+def test_the_distribution_is_reynoldsflow_rs_at_the_workspace_version():
+    # Every artifact's one version: Cargo.toml's [workspace.package] version.
+    cargo = (Path(os.environ["REYNOLDSFLOW_REPO"]) / "Cargo.toml").read_text()
+    workspace = re.search(r"^\[workspace\.package\]\n(.*?)^\[", cargo, re.M | re.S).group(1)
+    version = re.search(r'^version = "([^"]+)"', workspace, re.M).group(1)
+    meta = metadata("reynoldsflow-rs")
+    assert meta["Name"] == "reynoldsflow-rs"
+    assert meta["Version"] == version == rf.__version__
