@@ -1,7 +1,12 @@
 //! An endless stream in flat memory: 20 000 frames of 320×240 through
 //! `reynoldsflow run - --raw 320x240 --out - --format rgb24`, resident
-//! memory read from /proc while it runs, after the first 1 000 results and
-//! at the end.
+//! memory read from /proc while it runs: after the first 1 000 results,
+//! halfway and at the end.
+//!
+//! The buffer pools grow when a pair is late (a busy machine), by one
+//! buffer at a time, up to a bound: a step, once. A leak grows in both
+//! halves of the run; the test fails on growth in both, and on any step
+//! above a few buffers.
 //!
 //! The stream is 1.5 G pixels, minutes in the test profile: this test runs
 //! in the release profile, from scripts/test
@@ -20,6 +25,11 @@ const W: usize = 320;
 const H: usize = 240;
 const FRAMES: usize = 20_000;
 const EARLY: usize = 1_000;
+const MIDDLE: usize = FRAMES / 2;
+/// The most one half of the run may grow by without counting as growth.
+const FLAT_KIB: u64 = 512;
+/// The most the pools may grow by in all: a few 2 MiB payload mappings.
+const BOUND_KIB: u64 = 8 * 1024;
 
 /// Frame `t`: a textured scene panning right, one column a frame, with a
 /// fixed-pattern grain (so every pair has motion and texture).
@@ -66,19 +76,22 @@ fn resident_memory_is_flat_over_20000_frames() {
     // Each figure is the highest VmRSS over a window of 50 results, both
     // windows with the pipeline busy (pairs in flight come and go within a
     // window; growth would show between them).
-    let (early_window, late_window) = (EARLY - 50..EARLY, FRAMES - 150..FRAMES - 100);
+    let windows = [
+        EARLY - 50..EARLY,
+        MIDDLE - 50..MIDDLE,
+        FRAMES - 150..FRAMES - 100,
+    ];
     let (mut received, mut buf) = (0usize, vec![0u8; 1 << 16]);
-    let (mut early, mut late) = (0u64, 0u64);
+    let mut rss = [0u64; 3];
     loop {
         let n = stdout.read(&mut buf).unwrap();
         assert!(n > 0, "the stream ended early, after {received} bytes");
         received += n;
         let results = received / result;
-        if early_window.contains(&results) {
-            early = early.max(status_kib(pid, "VmRSS"));
-        }
-        if late_window.contains(&results) {
-            late = late.max(status_kib(pid, "VmRSS"));
+        for (window, kib) in windows.iter().zip(&mut rss) {
+            if window.contains(&results) {
+                *kib = (*kib).max(status_kib(pid, "VmRSS"));
+            }
         }
         // Every pair computed: FRAMES − 1 results, the last input consumed.
         if results == FRAMES - 1 && received % result == 0 {
@@ -101,12 +114,21 @@ fn resident_memory_is_flat_over_20000_frames() {
         "{} bytes after the last result",
         rest.len()
     );
-    println!(
-        "{FRAMES} frames of {W}x{H}: VmRSS {early} KiB around result {EARLY}, {late} KiB near the end ({:+} KiB); peak {peak} KiB",
-        late as i64 - early as i64
+    let [early, middle, late] = rss;
+    let report = format!(
+        "{FRAMES} frames of {W}x{H}: VmRSS {early} KiB around result {EARLY}, {middle} KiB \
+         around {MIDDLE}, {late} KiB near the end ({:+} KiB, {:+} KiB); peak {peak} KiB",
+        middle as i64 - early as i64,
+        late as i64 - middle as i64
+    );
+    println!("{report}");
+    let grew = |from: u64, to: u64| to.saturating_sub(from) > FLAT_KIB;
+    assert!(
+        !(grew(early, middle) && grew(middle, late)),
+        "grew in both halves: {report}"
     );
     assert!(
-        late.abs_diff(early) <= 1024,
-        "VmRSS {early} KiB around result {EARLY}, {late} KiB near the end"
+        late.saturating_sub(early) <= BOUND_KIB,
+        "grew past the pools' bound: {report}"
     );
 }
