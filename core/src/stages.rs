@@ -115,13 +115,18 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
 
 /// `out[i] = G` of the five rows' `i`-th values. Every row a parameter of
 /// its own (the hot loops' pattern, here and in `tail`): Rust tells the
-/// compiler that references passed so do not alias, and the compiler keeps
-/// that knowledge when it inlines the function (as scopes on each load and
-/// store). Rows reached through arrays or structures carry no such
-/// promise, and where the engine's rows come from one memory the compiler
-/// must then prove them apart itself, which it did for some loops and not
-/// for others (the x86-64 pass ran its vertical sums scalar).
-#[inline(always)]
+/// compiler that references passed so do not alias. Rows reached through
+/// arrays or structures carry no such promise, and where the engine's rows
+/// come from one memory the compiler must then prove them apart itself,
+/// which it did for some loops and not for others (the x86-64 pass ran its
+/// vertical sums scalar). Inlined, the promise did not survive for every
+/// loop either when the rows' width is known only at run time (a
+/// `SliceEngine`: on aarch64 130 instructions per pixel at 640×480, against
+/// 100 with the loops out of line, `scripts/embedded-check`). So where the
+/// pass is not compiled twice (`dispatched_pass`, `build.rs`) each such
+/// loop is a function of its own.
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
     let len = out.len();
     let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
@@ -151,12 +156,29 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
     // where the loads are the cost); taps where they vectorise (a running
     // sum would serialise them), and for `f32`, whose sums must keep one
     // order on every target.
-    if !crate::VECTOR_ROWS && T::EXACT {
-        if let Some(taps) = cut(row, first, len + 4) {
-            running_binomial(taps, out);
-        }
-    } else {
+    if crate::VECTOR_ROWS {
         tapped_binomial(row, first, out);
+    } else if let Some(taps) = cut(row, first, len + 4) {
+        if T::EXACT {
+            running_binomial(taps, out);
+        } else {
+            sliding_binomial(taps, out);
+        }
+    }
+}
+
+/// [`tapped_binomial`] on the scalar boards: the last four taps carried
+/// from column to column, one load a column, the sum in the same order.
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
+fn sliding_binomial<T: Sample>(taps: &[T], out: &mut [T]) {
+    let (Some(&[x0, x1, x2, x3]), Some(rest)) = (taps.get(..4), taps.get(4..)) else {
+        return;
+    };
+    let (mut a, mut b, mut c, mut d) = (x0, x1, x2, x3);
+    for (o, &e) in out.iter_mut().zip(rest) {
+        *o = T::binomial(a, b, c, d, e);
+        (a, b, c, d) = (b, c, d, e);
     }
 }
 
@@ -164,10 +186,7 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
 #[inline(always)]
 fn tapped_binomial<T: Sample>(row: &[T], first: usize, out: &mut [T]) {
     let len = out.len();
-    // Each tap cut from the row itself: cut from one slice of `len + 4`
-    // instead, aarch64 counts 347 instructions per pixel against 285
-    // (`scripts/embedded-check`); `taps5` cost the M4 24 (1 059 against
-    // 1 035 at 320×240).
+    // Each tap cut from the row itself: independent lanes to vectorise.
     let at = |shift: usize| cut(row, first.wrapping_add(shift), len);
     let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (at(0), at(1), at(2), at(3), at(4)) else {
         return;
@@ -180,7 +199,8 @@ fn tapped_binomial<T: Sample>(row: &[T], first: usize, out: &mut [T]) {
 /// `s₂ = s₁′ + s₁`, `s₃ = s₂′ + s₂` and the output `s₃′ + s₃` (primes: the
 /// previous column's). Every partial sum has nonnegative weights summing to
 /// at most 16, so it stays within the output's bound.
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 fn running_binomial<T>(taps: &[T], out: &mut [T])
 where
     T: Copy + Add<Output = T>,
@@ -257,7 +277,8 @@ fn vertical_parts(
 
 /// [`vertical_parts`]' loop, every output row a parameter of its own (see
 /// [`binomial_of`]); the inputs are only read.
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 fn vertical_parts_of(
     [d0, d1, d2, d3, d4]: [&[i16]; 5],
     v1: &mut [i16],
@@ -300,6 +321,17 @@ fn horizontal_parts(
     let (Some(ex), Some(ey)) = (cut_mut(ex, start, len), cut_mut(ey, start, len)) else {
         return;
     };
+    if !crate::VECTOR_ROWS {
+        // Each part from two columns left of the first output to two right
+        // of the last.
+        let window = |row| cut(row, start.wrapping_sub(2), len + 4);
+        let [v1, v2, v3, v4] = vert.map(window);
+        if let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) {
+            boundary_minus_domain_x_row(v1, v2, ex);
+            boundary_minus_domain_y_row(v3, v4, ey);
+        }
+        return;
+    }
     // Each tap its own shifted slice: independent lanes to vectorise.
     let [v1, v2, v3, v4] = vert.map(|row| taps5(row, start, len));
     let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
@@ -318,7 +350,8 @@ fn horizontal_parts(
 /// tap and the output a parameter of its own (see [`binomial_of`]).
 /// Counted, not enumerated: `iter_mut().enumerate()` left a bounds check
 /// (a panic path) on the taps.
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn component_of(
     formula: impl Fn([i32; 5], [i32; 5]) -> i32,
@@ -383,6 +416,64 @@ fn boundary_minus_domain_y(v3: [i32; 5], v4: [i32; 5]) -> i32 {
     let e = kb_y - 3 * bs_y;
     debug_assert!(e.abs() <= E_MAX, "E y = {e}");
     e
+}
+
+/// `E` x of a row on the scalar boards, from its vertical parts two
+/// columns wider either side, as [`boundary_minus_domain_x`] with the taps
+/// carried from column to column: with the pair sums `u[k] = v2[k] +
+/// v2[k+1]`, `Box⋆Sobx = u[i+1] − u[i−2]`. Two loads a column.
+#[inline(never)]
+fn boundary_minus_domain_x_row(v1: &[i16], v2: &[i16], out: &mut [i32]) {
+    let len = out.len();
+    let (Some(v1), Some(&[w0, w1, w2, w3]), Some(v2)) =
+        (v1.get(1..len + 3), v2.get(..4), v2.get(4..len + 4))
+    else {
+        return;
+    };
+    let [w0, w1, w2, w3] = [w0, w1, w2, w3].map(i32::from);
+    // `v1` from the column left of the first output; the pair sums left of
+    // it (u[i−2], u[i−1], u[i]) and the last tap of `v2` (v2[i+1]).
+    let (mut left, mut mid) = (i32::from(v1[0]), i32::from(v1[1]));
+    let (mut u0, mut u1, mut u2, mut last) = (w0 + w1, w1 + w2, w2 + w3, w3);
+    for i in 0..len {
+        let right = i32::from(v1[i + 2]);
+        let next = i32::from(v2[i]);
+        let u3 = last + next;
+        let e = (right - left) - 3 * (u3 - u0);
+        debug_assert!(e.abs() <= E_MAX, "E x = {e}");
+        out[i] = e;
+        (left, mid, u0, u1, u2, last) = (mid, right, u1, u2, u3, next);
+    }
+}
+
+/// `E` y of a row on the scalar boards (see [`boundary_minus_domain_x_row`]):
+/// `[1 3 4 3 1] = [1 1] ⋆ [1 1] ⋆ [1 1 1]`, so with `a[k] = v4[k] + v4[k+1]`
+/// and `b[k] = a[k−1] + a[k]`, `Box⋆Soby = b[i−1] + b[i] + b[i+1]`.
+#[inline(never)]
+fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
+    let len = out.len();
+    let (Some(v3), Some(&[w0, w1, w2, w3]), Some(v4)) =
+        (v3.get(1..len + 3), v4.get(..4), v4.get(4..len + 4))
+    else {
+        return;
+    };
+    let [w0, w1, w2, w3] = [w0, w1, w2, w3].map(i32::from);
+    let (mut left, mut mid) = (i32::from(v3[0]), i32::from(v3[1]));
+    // a[i−1] .. a[i+1] need v4 up to i+2; before the first column:
+    // b[i−1] = a[i−2] + a[i−1], b[i] = a[i−1] + a[i], and a[i].
+    let (a0, a1, a2) = (w0 + w1, w1 + w2, w2 + w3);
+    let (mut b0, mut b1, mut a, mut last) = (a0 + a1, a1 + a2, a2, w3);
+    for i in 0..len {
+        let right = i32::from(v3[i + 2]);
+        let next = i32::from(v4[i]);
+        let a_next = last + next;
+        let b2 = a + a_next;
+        let kb = left + 4 * mid + right;
+        let e = kb - 3 * (b0 + b1 + b2);
+        debug_assert!(e.abs() <= E_MAX, "E y = {e}");
+        out[i] = e;
+        (left, mid, b0, b1, a, last) = (mid, right, b1, b2, a_next, next);
+    }
 }
 
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five rows of `E` centred on it,
@@ -585,7 +676,8 @@ fn products_row(
 /// parameter of its own (see [`binomial_of`]): `V` x left of, at and right
 /// of each column, `V` y above, at and below it, `p0`'s 3×3 neighbourhood
 /// (rows up, mid, down; columns left, at, right), `d`, and the products.
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn products_of(
     (kappa, shift): ([i32; 2], u32),
@@ -736,6 +828,104 @@ mod tests {
                 running_binomial(&taps, &mut running);
                 assert_eq!(tapped, want, "len {len}");
                 assert_eq!(running, want, "len {len}");
+            }
+        }
+    }
+
+    /// The scalar boards' sliding `f32` binomial sums in the tapped form's
+    /// order: the same bits, on every length.
+    #[test]
+    fn sliding_binomial_is_the_tapped_one() {
+        let mut seed = 0x0bad_5eed_1234_5678u64;
+        for len in 0..40 {
+            let taps: std::vec::Vec<f32> = (0..len + 4)
+                .map(|_| {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    // Products as the engine makes them: multiples of 2⁻²⁰
+                    // up to 2²⁵, with every bit of the mantissa in use.
+                    ((seed >> 11) as i64 - (1 << 52)) as f32 * (1.0 / 1_048_576.0) / 2048.0
+                })
+                .collect();
+            let (mut tapped, mut sliding) = (std::vec![0.0; len], std::vec![0.0; len]);
+            tapped_binomial(&taps, 0, &mut tapped);
+            sliding_binomial(&taps, &mut sliding);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<std::vec::Vec<_>>();
+            assert_eq!(bits(&sliding), bits(&tapped), "len {len}");
+        }
+    }
+
+    /// The scalar boards' rows of `E` are the tapped components, on every
+    /// length and on vertical parts at their bounds.
+    #[test]
+    fn rows_of_e_are_its_components() {
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        for len in 0..40 {
+            for bound in [2, 255] {
+                // Vertical parts as the engine makes them, from five rows
+                // of `d` (their bounds hold `E` within its own).
+                let mut row = || -> std::vec::Vec<i16> {
+                    (0..len + 4)
+                        .map(|_| {
+                            seed ^= seed << 13;
+                            seed ^= seed >> 7;
+                            seed ^= seed << 17;
+                            [
+                                -bound,
+                                bound,
+                                (seed % (2 * bound as u64 + 1)) as i16 - bound,
+                            ][(seed >> 40) as usize % 3]
+                        })
+                        .collect()
+                };
+                let d: [std::vec::Vec<i16>; 5] = core::array::from_fn(|_| row());
+                let [mut v1, mut v2, mut v3, mut v4] =
+                    core::array::from_fn(|_| std::vec![0i16; len + 4]);
+                let [d0, d1, d2, d3, d4] = d.each_ref().map(|r| &r[..]);
+                vertical_parts_of([d0, d1, d2, d3, d4], &mut v1, &mut v2, &mut v3, &mut v4);
+                let taps = |v: &[i16]| -> [std::vec::Vec<i16>; 5] {
+                    core::array::from_fn(|k| v[k..k + len].to_vec())
+                };
+                let [t1, t2, t3, t4] = [&v1, &v2, &v3, &v4].map(|v| taps(v));
+                let (mut want_x, mut want_y) = (std::vec![0; len], std::vec![0; len]);
+                let [a, b, c, d, e] = &t1;
+                let [f, g, h, i, j] = &t2;
+                component_of(
+                    boundary_minus_domain_x,
+                    a,
+                    b,
+                    c,
+                    d,
+                    e,
+                    f,
+                    g,
+                    h,
+                    i,
+                    j,
+                    &mut want_x,
+                );
+                let [a, b, c, d, e] = &t3;
+                let [f, g, h, i, j] = &t4;
+                component_of(
+                    boundary_minus_domain_y,
+                    a,
+                    b,
+                    c,
+                    d,
+                    e,
+                    f,
+                    g,
+                    h,
+                    i,
+                    j,
+                    &mut want_y,
+                );
+                let (mut ex, mut ey) = (std::vec![0; len], std::vec![0; len]);
+                boundary_minus_domain_x_row(&v1, &v2, &mut ex);
+                boundary_minus_domain_y_row(&v3, &v4, &mut ey);
+                assert_eq!(ex, want_x, "len {len}");
+                assert_eq!(ey, want_y, "len {len}");
             }
         }
     }

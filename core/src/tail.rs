@@ -153,7 +153,8 @@ pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
 /// And every row is cut to one length here, in the function that indexes
 /// it, so no index is bounds-checked on any target (`scripts/embedded-check`
 /// walks the call graph for panics).
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn pixels_of<const FIELDS: bool>(
     k: &TailConstants,
