@@ -19,8 +19,8 @@ use crate::schedule::{
     V_START,
 };
 use crate::stages::{
-    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, StructureRows, boundary_minus_domain, smooth,
-    structure_row, vertical_binomial,
+    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
+    boundary_minus_domain, smooth, structure_row, vertical_binomial,
 };
 use crate::tail::{TailConstants, TailOut, TailRows, tail_row};
 use crate::{Config, Error, Fields, Job, Pixels, Tile};
@@ -534,6 +534,12 @@ impl Pass<'_> {
                 float_products: &mut rows.float_products,
                 int_sums: rows.int_sums.each_mut().map(|ring| ring.row_mut(j)),
                 float_sums: rows.float_sums.each_mut().map(|ring| ring.row_mut(j)),
+                // Free once `E` of this push is in its ring.
+                scratch: {
+                    let [gx, gy, ..] = &mut rows.vert_d;
+                    let [high, low] = &mut rows.e_scratch;
+                    ScratchRows { gx, gy, high, low }
+                },
             };
             structure_row(&input, structure, n);
         }

@@ -52,6 +52,14 @@ pub trait Sample: Copy + Default + Add<Output = Self> {
 
     /// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
     fn binomial(a: Self, b: Self, c: Self, d: Self, e: Self) -> Self;
+
+    /// [`Sample::binomial`] of every column of five rows on the scalar
+    /// boards (`out.len()` columns; shorter rows leave `out` untouched).
+    #[inline(always)]
+    fn binomial_rows(rows: [&[Self]; 5], out: &mut [Self]) {
+        let [a, b, c, d, e] = rows;
+        rolled_binomial_of(a, b, c, d, e, out);
+    }
 }
 
 impl Sample for i32 {
@@ -60,6 +68,12 @@ impl Sample for i32 {
     #[inline(always)]
     fn binomial(a: i32, b: i32, c: i32, d: i32, e: i32) -> i32 {
         (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_rows(rows: [&[i32]; 5], out: &mut [i32]) {
+        crate::m4::binomial_i32(rows, out);
     }
 }
 
@@ -71,6 +85,12 @@ impl Sample for f32 {
     #[inline(always)]
     fn binomial(a: f32, b: f32, c: f32, d: f32, e: f32) -> f32 {
         ((a + e) + (b + d) * 4.0) + c * 6.0
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_rows(rows: [&[f32]; 5], out: &mut [f32]) {
+        crate::m4::binomial_f32(rows, out);
     }
 }
 
@@ -94,21 +114,33 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
         return;
     };
     if crate::VECTOR_ROWS {
-        return binomial_of(a, b, c, d, e, out);
+        binomial_of(a, b, c, d, e, out);
+    } else {
+        T::binomial_rows([a, b, c, d, e], out);
     }
-    // On the scalar boards two columns per step, both loaded before either
-    // is stored: fewer instructions per pixel on RV32 (1 230 → 1 195) and
-    // the M4 at 320×240 (851 → 843), `scripts/embedded-check`.
-    let [pa, pb, pc, pd, pe] = [a, b, c, d, e].map(|row| row.chunks_exact(2));
-    let rows = pa.zip(pb).zip(pc).zip(pd).zip(pe);
-    for (o, ((((a, b), c), d), e)) in out.chunks_exact_mut(2).zip(rows) {
-        let x0 = T::binomial(a[0], b[0], c[0], d[0], e[0]);
-        let x1 = T::binomial(a[1], b[1], c[1], d[1], e[1]);
-        o[0] = x0;
-        o[1] = x1;
-    }
-    if len % 2 == 1 {
-        let i = len - 1;
+}
+
+/// [`binomial_of`] on the scalar boards, one column a step.
+#[inline(never)]
+pub(crate) fn rolled_binomial_of<T: Sample>(
+    a: &[T],
+    b: &[T],
+    c: &[T],
+    d: &[T],
+    e: &[T],
+    out: &mut [T],
+) {
+    let len = out.len();
+    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
+        a.get(..len),
+        b.get(..len),
+        c.get(..len),
+        d.get(..len),
+        e.get(..len),
+    ) else {
+        return;
+    };
+    for i in 0..len {
         out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
     }
 }
@@ -272,6 +304,10 @@ fn vertical_parts(
     ) else {
         return;
     };
+    #[cfg(fpu_f32)]
+    if crate::m4::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
+        return;
+    }
     vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
 }
 
@@ -279,7 +315,7 @@ fn vertical_parts(
 /// [`binomial_of`]); the inputs are only read.
 #[cfg_attr(dispatched_pass, inline(always))]
 #[cfg_attr(not(dispatched_pass), inline(never))]
-fn vertical_parts_of(
+pub(crate) fn vertical_parts_of(
     [d0, d1, d2, d3, d4]: [&[i16]; 5],
     v1: &mut [i16],
     v2: &mut [i16],
@@ -524,7 +560,7 @@ pub const INT_CHANNELS: usize = 3;
 pub const FLOAT_CHANNELS: usize = 2;
 
 /// 2⁻²⁰, the scaling of `Dn′` in the `f32` products (module doc).
-const DN_SCALE: f32 = 1.0 / 1_048_576.0;
+pub(crate) const DN_SCALE: f32 = 1.0 / 1_048_576.0;
 
 /// `Dn′ = round(Dn / 2^σ)` (half up) of
 /// `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q`, exactly, in 32-bit lanes: with
@@ -557,13 +593,13 @@ pub fn rounded_residual(
 /// whose length the compiler knows is `len`, so indexing it below `len`
 /// keeps no bounds check.
 #[inline(always)]
-fn cut<T>(row: &[T], start: usize, len: usize) -> Option<&[T]> {
+pub(crate) fn cut<T>(row: &[T], start: usize, len: usize) -> Option<&[T]> {
     row.get(start..)?.get(..len)
 }
 
 /// [`cut`], to be written.
 #[inline(always)]
-fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut [T]> {
+pub(crate) fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut [T]> {
     row.get_mut(start..)?.get_mut(..len)
 }
 
@@ -581,11 +617,31 @@ fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
     ])
 }
 
-/// The five products on columns `cols`: every row cut to exactly the
-/// columns (shifted rows one either side), then [`products_of`].
+/// The five products on columns `cols`: on the M4F `wide_products`'
+/// loops, elsewhere every row cut to exactly the columns (shifted rows one
+/// either side), then [`products_of`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn products_row(
+    input: &ResidualInputs<'_>,
+    xx: &mut [i32],
+    xy: &mut [i32],
+    yy: &mut [i32],
+    xd: &mut [f32],
+    yd: &mut [f32],
+    scratch: ScratchRows<'_>,
+    cols: core::ops::Range<usize>,
+) {
+    if cfg!(fpu_f32) {
+        crate::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
+    } else {
+        portable_products_row(input, xx, xy, yy, xd, yd, cols);
+    }
+}
+
+/// [`products_row`] on the targets other than the M4F.
+#[inline(always)]
+pub(crate) fn portable_products_row(
     input: &ResidualInputs<'_>,
     xx: &mut [i32],
     xy: &mut [i32],
@@ -764,6 +820,20 @@ fn products_of(
     }
 }
 
+/// Rows a structure row may use for its intermediate values (the engine
+/// lends rows that are free at that point; the M4F's products use them,
+/// `wide_products`).
+pub struct ScratchRows<'a> {
+    /// `X`.
+    pub gx: &'a mut [i16],
+    /// `Y`.
+    pub gy: &'a mut [i16],
+    /// `4·Q`, then the residual's high part.
+    pub high: &'a mut [i32],
+    /// The residual's low part.
+    pub low: &'a mut [i32],
+}
+
 /// The products' rows and the sums' rows of one structure row: the exact
 /// integer channels and the `f32` ones.
 pub struct StructureRows<'a, 'm> {
@@ -775,6 +845,8 @@ pub struct StructureRows<'a, 'm> {
     pub int_sums: [&'a mut [i32]; INT_CHANNELS],
     /// Likewise for the `f32` channels.
     pub float_sums: [&'a mut [f32]; FLOAT_CHANNELS],
+    /// Rows for the intermediate values (FPU boards).
+    pub scratch: ScratchRows<'a>,
 }
 
 /// The five products on `[5, n−5)`, then their horizontal `G` on
@@ -787,10 +859,11 @@ pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n:
         float_products,
         int_sums,
         float_sums,
+        scratch,
     } = rows;
     let [xx, xy, yy] = int_products;
     let [xd, yd] = float_products;
-    products_row(input, xx, xy, yy, xd, yd, span(n, 5));
+    products_row(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
     for (row, sum) in int_products.iter().zip(int_sums) {
         horizontal_binomial(row, sum, n, 7);
     }

@@ -109,6 +109,29 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
 #[cfg_attr(feature = "profile", inline(never))]
 #[cfg_attr(not(feature = "profile"), inline(always))]
 pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
+    // The M4F's magnitudes: a loop each, in assembly (`m4`).
+    #[cfg(fpu_f32)]
+    if let TailOut {
+        m: [m_d, m_c],
+        fields: None,
+    } = out
+    {
+        let TailRows {
+            abc: [a, b, c],
+            pq: [p, q],
+            v: [vx, vy],
+        } = *rows;
+        let units = [k.units.det_floor, k.units.v_d];
+        crate::m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
+        crate::m4::curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
+        return;
+    }
+    tail_row_portable(k, rows, out);
+}
+
+/// [`tail_row`] in portable code on every target.
+#[inline(always)]
+pub(crate) fn tail_row_portable(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
     let TailRows {
         abc: [a, b, c],
         pq: [p, q],
@@ -119,6 +142,8 @@ pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
         fields,
     } = out;
     match fields {
+        // The FPU boards: each magnitude a loop of its own (few rows, each
+        // in a register of its own).
         // Two instances, so that the magnitudes' loop writes nothing else.
         None => pixels_of::<false>(
             k,

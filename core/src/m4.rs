@@ -1,0 +1,386 @@
+//! The Cortex-M4F and M7 forms (`fpu_f32`: 32-bit Arm, hard float) of the
+//! row loops where the compiler's own code spends the most: the vertical
+//! binomials two columns a step, one double-word load per row (`LDRD`,
+//! `VLDM`).
+//!
+//! Why assembly: compiled from Rust, these loops ran unrolled two to four
+//! times with every row's pointer and every column's values live at once,
+//! more than the M4's 13 registers, and spilled (16 instructions a column
+//! of the integer binomial where 9 do). Each loop here computes exactly what
+//! its portable twin computes, in the same order where it is `f32`
+//! (`stages`), and the firmware's kernel check (`check`, run on the
+//! emulated M4 and M7 by `scripts/embedded-check`) holds each equal to its
+//! twin on rows at their bounds and random ones.
+//!
+//! Every loop reads and writes only the rows it is given, each cut to the
+//! loop's length before the assembly runs (`pairs` double-words of each),
+//! and touches no other memory, no stack and only the registers it names.
+#![allow(unsafe_code)]
+
+/// `out[i] = (a + e) + 4(b + d) + 6c` of the five rows' `i`-th values,
+/// exactly (`stages::Sample::binomial` for `i32`): as
+/// `(a + e) + 4b + 4d + 4c + 2c`, two columns a step. Rows shorter than
+/// `out` leave it untouched.
+pub(crate) fn binomial_i32(rows: [&[i32]; 5], out: &mut [i32]) {
+    let len = out.len();
+    let [Some(a), Some(b), Some(c), Some(d), Some(e)] = rows.map(|row| row.get(..len)) else {
+        return;
+    };
+    let pairs = len / 2;
+    if pairs > 0 {
+        // SAFETY: each pointer reads (or writes, `out`) `2 · pairs ≤ len`
+        // elements of its own slice, which is at least `len` long; `LDRD`
+        // and `STRD` need word alignment, which `i32` rows have. The
+        // registers written are the operands named here; flags are
+        // clobbered (no `preserves_flags`).
+        unsafe {
+            core::arch::asm!(
+                "2:",
+                "ldrd {x0}, {x1}, [{a}], #8",
+                "ldrd {t0}, {t1}, [{e}], #8",
+                "add {x0}, {t0}",
+                "add {x1}, {t1}",
+                "ldrd {t0}, {t1}, [{b}], #8",
+                "add {x0}, {x0}, {t0}, lsl #2",
+                "add {x1}, {x1}, {t1}, lsl #2",
+                "ldrd {t0}, {t1}, [{d}], #8",
+                "add {x0}, {x0}, {t0}, lsl #2",
+                "add {x1}, {x1}, {t1}, lsl #2",
+                "ldrd {t0}, {t1}, [{c}], #8",
+                "add {x0}, {x0}, {t0}, lsl #2",
+                "add {x1}, {x1}, {t1}, lsl #2",
+                "add {x0}, {x0}, {t0}, lsl #1",
+                "add {x1}, {x1}, {t1}, lsl #1",
+                "strd {x0}, {x1}, [{out}], #8",
+                "subs {n}, #1",
+                "bne 2b",
+                a = inout(reg) a.as_ptr() => _,
+                b = inout(reg) b.as_ptr() => _,
+                c = inout(reg) c.as_ptr() => _,
+                d = inout(reg) d.as_ptr() => _,
+                e = inout(reg) e.as_ptr() => _,
+                out = inout(reg) out.as_mut_ptr() => _,
+                n = inout(reg) pairs => _,
+                x0 = out(reg) _,
+                x1 = out(reg) _,
+                t0 = out(reg) _,
+                t1 = out(reg) _,
+                options(nostack),
+            );
+        }
+    }
+    if len % 2 == 1 {
+        let i = len - 1;
+        out[i] = (a[i] + e[i]) + ((b[i] + d[i]) << 2) + (c[i] << 2) + (c[i] << 1);
+    }
+}
+
+/// `out[i] = ((a + e) + (b + d) · 4) + c · 6` of the five rows' `i`-th
+/// values in `f32`, each step correctly rounded in this order
+/// (`stages::Sample::binomial` for `f32`; `VMLA` rounds its product, then
+/// its sum), two columns a step. Rows shorter than `out` leave it
+/// untouched.
+pub(crate) fn binomial_f32(rows: [&[f32]; 5], out: &mut [f32]) {
+    let len = out.len();
+    let [Some(a), Some(b), Some(c), Some(d), Some(e)] = rows.map(|row| row.get(..len)) else {
+        return;
+    };
+    let pairs = len / 2;
+    if pairs > 0 {
+        // SAFETY: as in `binomial_i32`; `VLDM`/`VSTM` need word alignment,
+        // which `f32` rows have. `s0`–`s7` (caller-saved) are named as
+        // clobbered.
+        unsafe {
+            core::arch::asm!(
+                "vmov s6, {four}",
+                "vmov s7, {six}",
+                "2:",
+                "vldmia {a}!, {{s0, s1}}",
+                "vldmia {e}!, {{s2, s3}}",
+                "vadd.f32 s0, s0, s2",
+                "vadd.f32 s1, s1, s3",
+                "vldmia {b}!, {{s2, s3}}",
+                "vldmia {d}!, {{s4, s5}}",
+                "vadd.f32 s2, s2, s4",
+                "vadd.f32 s3, s3, s5",
+                "vmla.f32 s0, s2, s6",
+                "vmla.f32 s1, s3, s6",
+                "vldmia {c}!, {{s2, s3}}",
+                "vmla.f32 s0, s2, s7",
+                "vmla.f32 s1, s3, s7",
+                "vstmia {out}!, {{s0, s1}}",
+                "subs {n}, #1",
+                "bne 2b",
+                a = inout(reg) a.as_ptr() => _,
+                b = inout(reg) b.as_ptr() => _,
+                c = inout(reg) c.as_ptr() => _,
+                d = inout(reg) d.as_ptr() => _,
+                e = inout(reg) e.as_ptr() => _,
+                out = inout(reg) out.as_mut_ptr() => _,
+                n = inout(reg) pairs => _,
+                four = in(reg) 4.0f32.to_bits(),
+                six = in(reg) 6.0f32.to_bits(),
+                out("s0") _,
+                out("s1") _,
+                out("s2") _,
+                out("s3") _,
+                out("s4") _,
+                out("s5") _,
+                out("s6") _,
+                out("s7") _,
+                options(nostack),
+            );
+        }
+    }
+    if len % 2 == 1 {
+        let i = len - 1;
+        out[i] = ((a[i] + e[i]) + (b[i] + d[i]) * 4.0) + c[i] * 6.0;
+    }
+}
+
+/// `E`'s four vertical parts from five rows of `d` (`stages::vertical_parts_of`):
+/// `v1 = b + 4c + d`, `v2 = (a + e) + 3(b + d) + 4c`, `v3 = d − b`,
+/// `v4 = (d + e) − (a + b)`, two columns at once in the 16-bit halves of a
+/// word (`SADD16`, `SSUB16`: each half its own lane). Every part is within
+/// ±3060 (`stages`), so no lane leaves `i16`. Two passes, `v3, v4` then
+/// `v1, v2`, so each keeps its rows' pointers in registers. Rows that are
+/// not word-aligned (an engine of an odd width in memory of the caller's)
+/// take the portable loop; so do rows shorter than `d0`.
+pub(crate) fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) -> bool {
+    let len = d[0].len();
+    let [Some(a), Some(b), Some(c), Some(dd), Some(e)] = d.map(|row| row.get(..len)) else {
+        return false;
+    };
+    let [v1, v2, v3, v4] = v;
+    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
+        v1.get_mut(..len),
+        v2.get_mut(..len),
+        v3.get_mut(..len),
+        v4.get_mut(..len),
+    ) else {
+        return false;
+    };
+    let aligned = |p: *const i16| (p as usize) % 4 == 0;
+    let words = [a, b, c, dd, e].iter().all(|r| aligned(r.as_ptr()))
+        && [&v1, &v2, &v3, &v4].iter().all(|r| aligned(r.as_ptr()));
+    if !words {
+        return false;
+    }
+    let pairs = len / 2;
+    if pairs > 0 {
+        // SAFETY: each pointer reads (writes: `v1`–`v4`) `2 · pairs ≤ len`
+        // halves of its own slice, at least `len` long, word-aligned
+        // (checked above). Flags are clobbered.
+        unsafe {
+            core::arch::asm!(
+                "2:",
+                "ldr {x}, [{b}], #4",
+                "ldr {y}, [{d}], #4",
+                "ssub16 {x}, {y}, {x}",
+                "str {x}, [{v3}], #4",
+                "ldr {y}, [{a}], #4",
+                "ldr {z}, [{e}], #4",
+                "ssub16 {y}, {z}, {y}",
+                "sadd16 {x}, {x}, {y}",
+                "str {x}, [{v4}], #4",
+                "subs {n}, #1",
+                "bne 2b",
+                a = inout(reg) a.as_ptr() => _,
+                b = inout(reg) b.as_ptr() => _,
+                d = inout(reg) dd.as_ptr() => _,
+                e = inout(reg) e.as_ptr() => _,
+                v3 = inout(reg) v3.as_mut_ptr() => _,
+                v4 = inout(reg) v4.as_mut_ptr() => _,
+                n = inout(reg) pairs => _,
+                x = out(reg) _,
+                y = out(reg) _,
+                z = out(reg) _,
+                options(nostack),
+            );
+            core::arch::asm!(
+                "2:",
+                "ldr {x}, [{b}], #4",
+                "ldr {y}, [{d}], #4",
+                "sadd16 {bd}, {x}, {y}",
+                "ldr {x}, [{c}], #4",
+                "sadd16 {x}, {x}, {x}",
+                "sadd16 {x}, {x}, {x}",
+                "sadd16 {x}, {x}, {bd}",
+                "str {x}, [{v1}], #4",
+                "ldr {y}, [{a}], #4",
+                "ldr {z}, [{e}], #4",
+                "sadd16 {y}, {y}, {z}",
+                "sadd16 {y}, {y}, {bd}",
+                "sadd16 {y}, {y}, {bd}",
+                "sadd16 {y}, {y}, {x}",
+                "str {y}, [{v2}], #4",
+                "subs {n}, #1",
+                "bne 2b",
+                a = inout(reg) a.as_ptr() => _,
+                b = inout(reg) b.as_ptr() => _,
+                c = inout(reg) c.as_ptr() => _,
+                d = inout(reg) dd.as_ptr() => _,
+                e = inout(reg) e.as_ptr() => _,
+                v1 = inout(reg) v1.as_mut_ptr() => _,
+                v2 = inout(reg) v2.as_mut_ptr() => _,
+                n = inout(reg) pairs => _,
+                bd = out(reg) _,
+                x = out(reg) _,
+                y = out(reg) _,
+                z = out(reg) _,
+                options(nostack),
+            );
+        }
+    }
+    if len % 2 == 1 {
+        let i = len - 1;
+        let (a, b, c, d, e) = (a[i], b[i], c[i], dd[i], e[i]);
+        v1[i] = b + 4 * c + d;
+        v2[i] = (a + e) + 3 * (b + d) + 4 * c;
+        v3[i] = d - b;
+        v4[i] = (d + e) - (a + b);
+    }
+    true
+}
+
+/// `|v_d|` of every pixel of `m_d` from the structure sums
+/// (`tail::divergence_free_magnitudes`), one pixel a step, every `f32`
+/// operation the portable one in the same order: `a4 = 4a + Λ4`, `c4`,
+/// `b4 = 4b` in integers, converted; `det = a4·c4 − b4·b4` (`VMLS` rounds
+/// its product, then its difference), clamped below at `det_floor` (a NaN,
+/// which cannot occur, would take the floor as the portable select does);
+/// `N = (c4·p − b4·q, a4·q − b4·p)`; `√(N0² + N1²) · (v_d / det)`. Rows
+/// shorter than `m_d` leave it untouched.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn divergence_free_magnitudes(
+    lambda4: i32,
+    [det_floor, v_d]: [f32; 2],
+    a: &[i32],
+    b: &[i32],
+    c: &[i32],
+    p: &[f32],
+    q: &[f32],
+    m_d: &mut [f32],
+) {
+    let n = m_d.len();
+    let (Some(a), Some(b), Some(c), Some(p), Some(q)) =
+        (a.get(..n), b.get(..n), c.get(..n), p.get(..n), q.get(..n))
+    else {
+        return;
+    };
+    if n == 0 {
+        return;
+    }
+    // SAFETY: each pointer reads (writes: `m_d`) `n` elements of its own
+    // slice, at least `n` long; `VLDM`/`VSTM` need word alignment, which
+    // `f32` rows have. `s0`–`s15` (caller-saved) are named as clobbered;
+    // flags are clobbered.
+    unsafe {
+        core::arch::asm!(
+            "vmov s14, {floor}",
+            "vmov s15, {unit}",
+            "2:",
+            "ldr {ta}, [{a}], #4",
+            "ldr {tb}, [{b}], #4",
+            "ldr {tc}, [{c}], #4",
+            "add {ta}, {lambda}, {ta}, lsl #2",
+            "add {tc}, {lambda}, {tc}, lsl #2",
+            "lsl {tb}, {tb}, #2",
+            "vmov s0, s1, {ta}, {tb}",
+            "vmov s2, {tc}",
+            "vcvt.f32.s32 s0, s0",
+            "vcvt.f32.s32 s1, s1",
+            "vcvt.f32.s32 s2, s2",
+            "vldmia {p}!, {{s3}}",
+            "vldmia {q}!, {{s4}}",
+            "vmul.f32 s5, s0, s2",
+            "vmls.f32 s5, s1, s1",
+            "vcmp.f32 s5, s14",
+            "vmrs APSR_nzcv, fpscr",
+            "it le",
+            "vmovle.f32 s5, s14",
+            "vdiv.f32 s6, s15, s5",
+            "vmul.f32 s7, s2, s3",
+            "vmls.f32 s7, s1, s4",
+            "vmul.f32 s8, s0, s4",
+            "vmls.f32 s8, s1, s3",
+            "vmul.f32 s9, s7, s7",
+            "vmla.f32 s9, s8, s8",
+            "vsqrt.f32 s9, s9",
+            "vmul.f32 s9, s9, s6",
+            "vstmia {out}!, {{s9}}",
+            "subs {n}, #1",
+            "bne 2b",
+            a = inout(reg) a.as_ptr() => _,
+            b = inout(reg) b.as_ptr() => _,
+            c = inout(reg) c.as_ptr() => _,
+            p = inout(reg) p.as_ptr() => _,
+            q = inout(reg) q.as_ptr() => _,
+            out = inout(reg) m_d.as_mut_ptr() => _,
+            n = inout(reg) n => _,
+            lambda = in(reg) lambda4,
+            floor = in(reg) det_floor.to_bits(),
+            unit = in(reg) v_d.to_bits(),
+            ta = out(reg) _,
+            tb = out(reg) _,
+            tc = out(reg) _,
+            out("s0") _,
+            out("s1") _,
+            out("s2") _,
+            out("s3") _,
+            out("s4") _,
+            out("s5") _,
+            out("s6") _,
+            out("s7") _,
+            out("s8") _,
+            out("s9") _,
+            out("s14") _,
+            out("s15") _,
+            options(nostack),
+        );
+    }
+}
+
+/// `|v_c| = √(Vx² + Vy²) · v_c` of every pixel of `m_c`
+/// (`tail::curl_free_magnitudes`), one pixel a step, in the portable
+/// order. Rows shorter than `m_c` leave it untouched.
+pub(crate) fn curl_free_magnitudes(v_c: f32, vx: &[i32], vy: &[i32], m_c: &mut [f32]) {
+    let n = m_c.len();
+    let (Some(vx), Some(vy)) = (vx.get(..n), vy.get(..n)) else {
+        return;
+    };
+    if n == 0 {
+        return;
+    }
+    // SAFETY: as in `divergence_free_magnitudes`; `s0`–`s3` are clobbered.
+    unsafe {
+        core::arch::asm!(
+            "vmov s3, {unit}",
+            "2:",
+            "ldr {x}, [{vx}], #4",
+            "ldr {y}, [{vy}], #4",
+            "vmov s0, s1, {x}, {y}",
+            "vcvt.f32.s32 s0, s0",
+            "vcvt.f32.s32 s1, s1",
+            "vmul.f32 s2, s0, s0",
+            "vmla.f32 s2, s1, s1",
+            "vsqrt.f32 s2, s2",
+            "vmul.f32 s2, s2, s3",
+            "vstmia {out}!, {{s2}}",
+            "subs {n}, #1",
+            "bne 2b",
+            vx = inout(reg) vx.as_ptr() => _,
+            vy = inout(reg) vy.as_ptr() => _,
+            out = inout(reg) m_c.as_mut_ptr() => _,
+            n = inout(reg) n => _,
+            unit = in(reg) v_c.to_bits(),
+            x = out(reg) _,
+            y = out(reg) _,
+            out("s0") _,
+            out("s1") _,
+            out("s2") _,
+            out("s3") _,
+            options(nostack),
+        );
+    }
+}
