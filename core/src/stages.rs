@@ -102,8 +102,7 @@ fn span(n: usize, r: usize) -> core::ops::Range<usize> {
 }
 
 /// The vertical binomial of five rows on `[r, n − r)`.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize) {
     let cols = span(n, r);
     let len = cols.len();
@@ -262,8 +261,7 @@ pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 /// `Kby3 = [−1 0 1]ᵀ⊗[1 4 1]`, `Box⋆Soby = [−1 −1 0 1 1]ᵀ⊗[1 3 4 3 1]`:
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn boundary_minus_domain(
     d: [&[i16]; 5],
     vert: &mut [&mut [i16]; 4],
@@ -518,8 +516,7 @@ fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
 /// not matter; this one keeps both halves in loops the compiler takes in
 /// vector lanes (with the horizontal half last, from a scratch row into
 /// the ring of `V`, the x86-64 pass ran it scalar).
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e_smoothed;
     vertical_binomial(ex, v.0, n, 4);
@@ -851,8 +848,7 @@ pub struct StructureRows<'a, 'm> {
 
 /// The five products on `[5, n−5)`, then their horizontal `G` on
 /// `[7, n−7)` into one row of each sum ring.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n: usize) {
     let StructureRows {
         int_products,

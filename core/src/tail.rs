@@ -106,8 +106,7 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
 
 /// The tail of every pixel of `out`. Every row is as long as `m_d` (the
 /// engine's are); should one be shorter, nothing is written.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
     // The M4F's magnitudes: a loop each, in assembly (`m4`).
     #[cfg(fpu_f32)]
@@ -142,8 +141,6 @@ pub(crate) fn tail_row_portable(k: &TailConstants, rows: &TailRows<'_>, out: Tai
         fields,
     } = out;
     match fields {
-        // The FPU boards: each magnitude a loop of its own (few rows, each
-        // in a register of its own).
         // Two instances, so that the magnitudes' loop writes nothing else.
         None => pixels_of::<false>(
             k,
