@@ -113,7 +113,7 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
         return;
     };
     if crate::VECTOR_ROWS {
-        binomial_of(a, b, c, d, e, out);
+        binomial_of(a, b, c, d, e, opaque(out));
     } else {
         T::binomial_rows([a, b, c, d, e], out);
     }
@@ -355,6 +355,7 @@ fn horizontal_parts(
     let (Some(ex), Some(ey)) = (cut_mut(ex, start, len), cut_mut(ey, start, len)) else {
         return;
     };
+    let (ex, ey) = (opaque(ex), opaque(ey));
     if !crate::VECTOR_ROWS {
         // Each part from two columns left of the first output to two right
         // of the last.
@@ -584,6 +585,23 @@ pub fn rounded_residual(
     let dn = high + ((rest + (1 << (shift - 1))) >> shift);
     debug_assert!(dn.unsigned_abs() <= 1 << 27, "Dn′ = {dn} beyond 2²⁷");
     dn
+}
+
+/// `row`, its address hidden from the compiler where the pass is compiled
+/// twice (`dispatched_pass`): derived from the engine's carving of its
+/// memory, the address told the compiler where a row stood against 16-byte
+/// boundaries, and it split each 32-byte store of `E` into four and built
+/// `V`'s loads in the tail from shuffles (x86-64: 54.5 → 51.2 instructions
+/// a pixel with this on `E`, the vertical sums and the tail's `V`,
+/// `scripts/profile-stages`). A row's address passes through memory once
+/// a call.
+#[inline(always)]
+pub(crate) fn opaque<T>(row: T) -> T {
+    if cfg!(dispatched_pass) {
+        core::hint::black_box(row)
+    } else {
+        row
+    }
 }
 
 /// `len` elements of `row` from `start` (`None` if it is shorter): a slice

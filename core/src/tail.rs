@@ -32,6 +32,7 @@
 
 use crate::fpu::sqrt;
 use crate::params::Units;
+use crate::stages::opaque;
 
 /// The rows the tail reads, each from the first output column: the
 /// structure sums `a, b, c` (exact integers) and `p, q` (`f32`), and `V`.
@@ -136,6 +137,7 @@ pub(crate) fn tail_row_portable(k: &TailConstants, rows: &TailRows<'_>, out: Tai
         pq: [p, q],
         v: [vx, vy],
     } = *rows;
+    let (vx, vy) = (opaque(vx), opaque(vy));
     let TailOut {
         m: [m_d, m_c],
         fields,
