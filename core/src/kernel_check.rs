@@ -20,7 +20,9 @@ pub fn run() -> Result<usize, &'static str> {
 mod m4 {
     use super::LEN;
     use crate::m4;
-    use crate::stages::{rolled_binomial_of, vertical_parts_of};
+    use crate::stages::{
+        rolled_binomial_of, running_binomial, sliding_binomial, vertical_parts_of,
+    };
     use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
     use crate::{Config, IntensityScale, Params};
 
@@ -57,13 +59,14 @@ mod m4 {
         Ok(rows)
     }
 
-    /// Both vertical binomials, on sums at the bound of the engine's
-    /// largest (`E` smoothed and the structure products' horizontal sums,
-    /// `< 2²⁴`), and `f32` sums with every mantissa bit in use.
+    /// The vertical and horizontal binomials, on sums at the bound of the
+    /// engine's largest (`E` smoothed and the structure products'
+    /// horizontal sums, `< 2²⁴`), and `f32` sums with every mantissa bit in
+    /// use.
     fn binomials(values: &mut Values, len: usize) -> Result<usize, &'static str> {
-        let ints: [[i32; LEN]; 5] =
+        let ints: [[i32; LEN + 4]; 5] =
             core::array::from_fn(|_| core::array::from_fn(|_| values.within((1 << 24) - 1) as i32));
-        let floats: [[f32; LEN]; 5] = core::array::from_fn(|_| {
+        let floats: [[f32; LEN + 4]; 5] = core::array::from_fn(|_| {
             core::array::from_fn(|_| values.within(1 << 45) as f32 * (1.0 / 1_048_576.0))
         });
         let [a, b, c, d, e] = ints.each_ref().map(|r| &r[..len]);
@@ -80,7 +83,26 @@ mod m4 {
         if want.map(f32::to_bits) != got.map(f32::to_bits) {
             return Err("binomial_f32");
         }
-        Ok(2)
+        // The horizontal ones, on `len + 4` taps.
+        let [taps, ..] = &ints;
+        let (mut want, mut got) = ([0i32; LEN], [0i32; LEN]);
+        if let Some(taps) = taps.get(..len + 4) {
+            running_binomial(taps, &mut want[..len]);
+            m4::running_binomial_i32(taps, &mut got[..len]);
+        }
+        if want != got {
+            return Err("running_binomial_i32");
+        }
+        let [taps, ..] = &floats;
+        let (mut want, mut got) = ([0f32; LEN], [0f32; LEN]);
+        if let Some(taps) = taps.get(..len + 4) {
+            sliding_binomial(taps, &mut want[..len]);
+            m4::sliding_binomial_f32(taps, &mut got[..len]);
+        }
+        if want.map(f32::to_bits) != got.map(f32::to_bits) {
+            return Err("sliding_binomial_f32");
+        }
+        Ok(4)
     }
 
     /// `E`'s vertical parts on rows of `d` at ±255 and between, in

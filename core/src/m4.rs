@@ -384,3 +384,170 @@ pub(crate) fn curl_free_magnitudes(v_c: f32, vx: &[i32], vy: &[i32], m_c: &mut [
         );
     }
 }
+
+/// The horizontal binomial of a row of exact sums as four running pair
+/// sums (`stages::running_binomial`): `s₁ = x′ + x`, `s₂ = s₁′ + s₁`,
+/// `s₃ = s₂′ + s₂`, output `s₃′ + s₃`, one load and four adds a column.
+/// Five columns a step, so that the registers trade roles back to where
+/// they started (the new tap lands in the register the last output left)
+/// and no value moves; the columns after the last full step, and the taps
+/// before the first output, in Rust. `taps` holds `out.len() + 4` values;
+/// a shorter one leaves `out` untouched.
+pub(crate) fn running_binomial_i32(taps: &[i32], out: &mut [i32]) {
+    let len = out.len();
+    let (Some(&[x0, x1, x2, x3]), Some(rest)) = (taps.get(..4), taps.get(4..len + 4)) else {
+        return;
+    };
+    let (s1_a, s1_b, s1_c) = (x0 + x1, x1 + x2, x2 + x3);
+    let (s2_a, s2_b) = (s1_a + s1_b, s1_b + s1_c);
+    let (mut x, mut s1, mut s2, mut s3) = (x3, s1_c, s2_b, s2_a + s2_b);
+    let steps = len / 5;
+    if steps > 0 {
+        // SAFETY: the assembly reads `5 · steps ≤ len` values of `rest`
+        // and writes as many of `out`, both at least `len` long. Registers
+        // written are the operands named here; flags are clobbered.
+        unsafe {
+            core::arch::asm!(
+                "2:",
+                "ldr {e}, [{taps}], #4",
+                "add {a}, {a}, {e}",
+                "add {b}, {b}, {a}",
+                "add {c}, {c}, {b}",
+                "add {d}, {d}, {c}",
+                "str {d}, [{out}], #4",
+                "ldr {d}, [{taps}], #4",
+                "add {e}, {e}, {d}",
+                "add {a}, {a}, {e}",
+                "add {b}, {b}, {a}",
+                "add {c}, {c}, {b}",
+                "str {c}, [{out}], #4",
+                "ldr {c}, [{taps}], #4",
+                "add {d}, {d}, {c}",
+                "add {e}, {e}, {d}",
+                "add {a}, {a}, {e}",
+                "add {b}, {b}, {a}",
+                "str {b}, [{out}], #4",
+                "ldr {b}, [{taps}], #4",
+                "add {c}, {c}, {b}",
+                "add {d}, {d}, {c}",
+                "add {e}, {e}, {d}",
+                "add {a}, {a}, {e}",
+                "str {a}, [{out}], #4",
+                "ldr {a}, [{taps}], #4",
+                "add {b}, {b}, {a}",
+                "add {c}, {c}, {b}",
+                "add {d}, {d}, {c}",
+                "add {e}, {e}, {d}",
+                "str {e}, [{out}], #4",
+                "subs {n}, #1",
+                "bne 2b",
+                taps = inout(reg) rest.as_ptr() => _,
+                out = inout(reg) out.as_mut_ptr() => _,
+                n = inout(reg) steps => _,
+                a = inout(reg) x,
+                b = inout(reg) s1,
+                c = inout(reg) s2,
+                d = inout(reg) s3,
+                e = out(reg) _,
+                options(nostack),
+            );
+        }
+    }
+    for (o, &next) in out.iter_mut().zip(rest).skip(5 * steps) {
+        let t1 = x + next;
+        let t2 = s1 + t1;
+        let t3 = s2 + t2;
+        *o = s3 + t3;
+        (x, s1, s2, s3) = (next, t1, t2, t3);
+    }
+}
+
+/// The horizontal binomial of a row of `f32` sums in the portable order
+/// (`stages::sliding_binomial`): `((a + e) + (b + d) · 4) + c · 6` of the
+/// last five taps, one load a column. Five columns a step, the taps in
+/// `s0`–`s4` trading roles so that no value moves; the columns after the
+/// last full step in Rust. `taps` holds `out.len() + 4` values; a shorter
+/// one leaves `out` untouched.
+pub(crate) fn sliding_binomial_f32(taps: &[f32], out: &mut [f32]) {
+    let len = out.len();
+    let (Some(&[x0, x1, x2, x3]), Some(rest)) = (taps.get(..4), taps.get(4..len + 4)) else {
+        return;
+    };
+    let steps = len / 5;
+    if steps > 0 {
+        // SAFETY: as in `running_binomial_i32`; `s0`–`s8` (caller-saved)
+        // are named as clobbered.
+        unsafe {
+            core::arch::asm!(
+                "vmov s0, s1, {t0}, {t1}",
+                "vmov s2, s3, {t2}, {t3}",
+                "vmov s7, s8, {four}, {six}",
+                "2:",
+                "vldmia {taps}!, {{s4}}",
+                "vadd.f32 s5, s0, s4",
+                "vadd.f32 s6, s1, s3",
+                "vmla.f32 s5, s6, s7",
+                "vmla.f32 s5, s2, s8",
+                "vstmia {out}!, {{s5}}",
+                "vldmia {taps}!, {{s0}}",
+                "vadd.f32 s5, s1, s0",
+                "vadd.f32 s6, s2, s4",
+                "vmla.f32 s5, s6, s7",
+                "vmla.f32 s5, s3, s8",
+                "vstmia {out}!, {{s5}}",
+                "vldmia {taps}!, {{s1}}",
+                "vadd.f32 s5, s2, s1",
+                "vadd.f32 s6, s3, s0",
+                "vmla.f32 s5, s6, s7",
+                "vmla.f32 s5, s4, s8",
+                "vstmia {out}!, {{s5}}",
+                "vldmia {taps}!, {{s2}}",
+                "vadd.f32 s5, s3, s2",
+                "vadd.f32 s6, s4, s1",
+                "vmla.f32 s5, s6, s7",
+                "vmla.f32 s5, s0, s8",
+                "vstmia {out}!, {{s5}}",
+                "vldmia {taps}!, {{s3}}",
+                "vadd.f32 s5, s4, s3",
+                "vadd.f32 s6, s0, s2",
+                "vmla.f32 s5, s6, s7",
+                "vmla.f32 s5, s1, s8",
+                "vstmia {out}!, {{s5}}",
+                "subs {n}, #1",
+                "bne 2b",
+                taps = inout(reg) rest.as_ptr() => _,
+                out = inout(reg) out.as_mut_ptr() => _,
+                n = inout(reg) steps => _,
+                t0 = in(reg) x0.to_bits(),
+                t1 = in(reg) x1.to_bits(),
+                t2 = in(reg) x2.to_bits(),
+                t3 = in(reg) x3.to_bits(),
+                four = in(reg) 4.0f32.to_bits(),
+                six = in(reg) 6.0f32.to_bits(),
+                out("s0") _,
+                out("s1") _,
+                out("s2") _,
+                out("s3") _,
+                out("s4") _,
+                out("s5") _,
+                out("s6") _,
+                out("s7") _,
+                out("s8") _,
+                options(nostack),
+            );
+        }
+    }
+    // The taps before the first column after the assembly's last.
+    let done = 5 * steps;
+    let (Some(before), Some(out)) = (taps.get(done..done + 4), out.get_mut(done..)) else {
+        return;
+    };
+    let (Some(&[mut a, mut b, mut c, mut d]), Some(rest)) = (before.get(..4), rest.get(done..))
+    else {
+        return;
+    };
+    for (o, &e) in out.iter_mut().zip(rest) {
+        *o = ((a + e) + (b + d) * 4.0) + c * 6.0;
+        (a, b, c, d) = (b, c, d, e);
+    }
+}

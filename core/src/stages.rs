@@ -60,6 +60,18 @@ pub trait Sample: Copy + Default + Add<Output = Self> {
         let [a, b, c, d, e] = rows;
         rolled_binomial_of(a, b, c, d, e, out);
     }
+
+    /// The horizontal binomial of `out.len() + 4` taps on the scalar
+    /// boards: [`running_binomial`] for exact sums, [`sliding_binomial`]
+    /// (the tapped order) for `f32`.
+    #[inline(always)]
+    fn binomial_taps(taps: &[Self], out: &mut [Self]) {
+        if Self::EXACT {
+            running_binomial(taps, out);
+        } else {
+            sliding_binomial(taps, out);
+        }
+    }
 }
 
 impl Sample for i32 {
@@ -74,6 +86,12 @@ impl Sample for i32 {
     #[inline(always)]
     fn binomial_rows(rows: [&[i32]; 5], out: &mut [i32]) {
         crate::m4::binomial_i32(rows, out);
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_taps(taps: &[i32], out: &mut [i32]) {
+        crate::m4::running_binomial_i32(taps, out);
     }
 }
 
@@ -91,6 +109,12 @@ impl Sample for f32 {
     #[inline(always)]
     fn binomial_rows(rows: [&[f32]; 5], out: &mut [f32]) {
         crate::m4::binomial_f32(rows, out);
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_taps(taps: &[f32], out: &mut [f32]) {
+        crate::m4::sliding_binomial_f32(taps, out);
     }
 }
 
@@ -190,11 +214,7 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
     if crate::VECTOR_ROWS {
         tapped_binomial(row, first, out);
     } else if let Some(taps) = cut(row, first, len + 4) {
-        if T::EXACT {
-            running_binomial(taps, out);
-        } else {
-            sliding_binomial(taps, out);
-        }
+        T::binomial_taps(taps, out);
     }
 }
 
@@ -202,7 +222,7 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
 /// from column to column, one load a column, the sum in the same order.
 #[cfg_attr(dispatched_pass, inline(always))]
 #[cfg_attr(not(dispatched_pass), inline(never))]
-fn sliding_binomial<T: Sample>(taps: &[T], out: &mut [T]) {
+pub(crate) fn sliding_binomial<T: Sample>(taps: &[T], out: &mut [T]) {
     let (Some(&[x0, x1, x2, x3]), Some(rest)) = (taps.get(..4), taps.get(4..)) else {
         return;
     };
@@ -232,7 +252,7 @@ fn tapped_binomial<T: Sample>(row: &[T], first: usize, out: &mut [T]) {
 /// at most 16, so it stays within the output's bound.
 #[cfg_attr(dispatched_pass, inline(always))]
 #[cfg_attr(not(dispatched_pass), inline(never))]
-fn running_binomial<T>(taps: &[T], out: &mut [T])
+pub(crate) fn running_binomial<T>(taps: &[T], out: &mut [T])
 where
     T: Copy + Add<Output = T>,
 {
@@ -460,23 +480,27 @@ fn boundary_minus_domain_y(v3: [i32; 5], v4: [i32; 5]) -> i32 {
 #[inline(never)]
 fn boundary_minus_domain_x_row(v1: &[i16], v2: &[i16], out: &mut [i32]) {
     let len = out.len();
-    let (Some(v1), Some(&[w0, w1, w2, w3]), Some(v2)) =
-        (v1.get(1..len + 3), v2.get(..4), v2.get(4..len + 4))
-    else {
+    // Iterated, not indexed: no bounds check (and no panic path) in any
+    // build, however little it knows of the lengths.
+    let (Some(&[l0, l1]), Some(v1), Some(&[w0, w1, w2, w3]), Some(v2)) = (
+        v1.get(1..3),
+        v1.get(3..len + 3),
+        v2.get(..4),
+        v2.get(4..len + 4),
+    ) else {
         return;
     };
     let [w0, w1, w2, w3] = [w0, w1, w2, w3].map(i32::from);
     // `v1` from the column left of the first output; the pair sums left of
     // it (u[i−2], u[i−1], u[i]) and the last tap of `v2` (v2[i+1]).
-    let (mut left, mut mid) = (i32::from(v1[0]), i32::from(v1[1]));
+    let (mut left, mut mid) = (i32::from(l0), i32::from(l1));
     let (mut u0, mut u1, mut u2, mut last) = (w0 + w1, w1 + w2, w2 + w3, w3);
-    for i in 0..len {
-        let right = i32::from(v1[i + 2]);
-        let next = i32::from(v2[i]);
+    for ((o, &right), &next) in out.iter_mut().zip(v1).zip(v2) {
+        let (right, next) = (i32::from(right), i32::from(next));
         let u3 = last + next;
         let e = (right - left) - 3 * (u3 - u0);
         debug_assert!(e.abs() <= E_MAX, "E x = {e}");
-        out[i] = e;
+        *o = e;
         (left, mid, u0, u1, u2, last) = (mid, right, u1, u2, u3, next);
     }
 }
@@ -487,26 +511,28 @@ fn boundary_minus_domain_x_row(v1: &[i16], v2: &[i16], out: &mut [i32]) {
 #[inline(never)]
 fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
     let len = out.len();
-    let (Some(v3), Some(&[w0, w1, w2, w3]), Some(v4)) =
-        (v3.get(1..len + 3), v4.get(..4), v4.get(4..len + 4))
-    else {
+    let (Some(&[l0, l1]), Some(v3), Some(&[w0, w1, w2, w3]), Some(v4)) = (
+        v3.get(1..3),
+        v3.get(3..len + 3),
+        v4.get(..4),
+        v4.get(4..len + 4),
+    ) else {
         return;
     };
     let [w0, w1, w2, w3] = [w0, w1, w2, w3].map(i32::from);
-    let (mut left, mut mid) = (i32::from(v3[0]), i32::from(v3[1]));
+    let (mut left, mut mid) = (i32::from(l0), i32::from(l1));
     // a[i−1] .. a[i+1] need v4 up to i+2; before the first column:
     // b[i−1] = a[i−2] + a[i−1], b[i] = a[i−1] + a[i], and a[i].
     let (a0, a1, a2) = (w0 + w1, w1 + w2, w2 + w3);
     let (mut b0, mut b1, mut a, mut last) = (a0 + a1, a1 + a2, a2, w3);
-    for i in 0..len {
-        let right = i32::from(v3[i + 2]);
-        let next = i32::from(v4[i]);
+    for ((o, &right), &next) in out.iter_mut().zip(v3).zip(v4) {
+        let (right, next) = (i32::from(right), i32::from(next));
         let a_next = last + next;
         let b2 = a + a_next;
         let kb = left + 4 * mid + right;
         let e = kb - 3 * (b0 + b1 + b2);
         debug_assert!(e.abs() <= E_MAX, "E y = {e}");
-        out[i] = e;
+        *o = e;
         (left, mid, b0, b1, a, last) = (mid, right, b1, b2, a_next, next);
     }
 }
