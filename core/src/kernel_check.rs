@@ -24,7 +24,7 @@ mod m4 {
         rolled_binomial_of, running_binomial, sliding_binomial, vertical_parts_of,
     };
     use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
-    use crate::{Config, IntensityScale, Params};
+    use crate::{Config, IntensityScale, Params, wide_products};
 
     /// xorshift64: values across a range, and its ends one time in four.
     struct Values(u64);
@@ -54,6 +54,7 @@ mod m4 {
         for len in 0..=LEN {
             rows += binomials(&mut values, len)?;
             rows += vertical_parts(&mut values, len)?;
+            rows += products(&mut values, len)?;
             rows += magnitudes(&mut values, len)?;
         }
         Ok(rows)
@@ -141,6 +142,38 @@ mod m4 {
             }
         }
         Ok(1)
+    }
+
+    /// The gradients on rows of `p0` from 0 to 255, and the residual's
+    /// products at `σ = 8` from gradients, `V` and the residual's parts at
+    /// their bounds (`wide_products`).
+    fn products(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let p0: [[u8; LEN + 2]; 3] =
+            core::array::from_fn(|_| core::array::from_fn(|_| (values.within(127) + 128) as u8));
+        let [up, mid, down] = p0.each_ref().map(|r| &r[..len + 2]);
+        let (mut want, mut got) = ([[0i16; LEN]; 2], [[0i16; LEN]; 2]);
+        let [wx, wy] = want.each_mut().map(|r| &mut r[..len]);
+        wide_products::gradients_of(up, mid, down, wx, wy);
+        let [gx, gy] = got.each_mut().map(|r| &mut r[..len]);
+        m4::gradients(up, mid, down, gx, gy);
+        if want != got {
+            return Err("gradients");
+        }
+        let mut row =
+            |bound: i64| -> [i32; LEN] { core::array::from_fn(|_| values.within(bound) as i32) };
+        let (vx, vy, high, low) = (row(6_854_400), row(6_854_400), row((1 << 28) - 1), row(127));
+        let low = low.map(|l| l.abs());
+        let [gx, gy] = got.each_ref().map(|r| &r[..len]);
+        let (mut want, mut got) = ([[0f32; LEN]; 2], [[0f32; LEN]; 2]);
+        let [xd, yd] = want.each_mut().map(|r| &mut r[..len]);
+        let (vx, vy, high, low) = (&vx[..len], &vy[..len], &high[..len], &low[..len]);
+        wide_products::residual_products_of::<8>(8, gx, gy, vx, vy, high, low, xd, yd);
+        let [xd, yd] = got.each_mut().map(|r| &mut r[..len]);
+        m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
+        if want.map(|r| r.map(f32::to_bits)) != got.map(|r| r.map(f32::to_bits)) {
+            return Err("residual_products_8");
+        }
+        Ok(2)
     }
 
     /// Both magnitudes against the portable tail, on structure sums built

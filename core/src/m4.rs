@@ -551,3 +551,178 @@ pub(crate) fn sliding_binomial_f32(taps: &[f32], out: &mut [f32]) {
         (a, b, c, d) = (b, c, d, e);
     }
 }
+
+/// `X·Dn′·2⁻²⁰` and `Y·Dn′·2⁻²⁰` of every column at `σ = 8`
+/// (`wide_products::residual_products_of::<8>`): `Dn′ = high −
+/// ⌊(low + X·Vx + Y·Vy) / 2⁸⌋` with two `SMLAL`s into a 64-bit sum, its
+/// quotient's low word from the sum's two words, then `Dn′·2⁻²⁰` by the
+/// fixed-point `VCVT` (`#20` fraction bits: the portable
+/// `Dn′ as f32 · 2⁻²⁰`, both rounding `Dn′` once, the scaling exact) and
+/// the two products. Thirteen rows and temporaries fill the core's
+/// registers; the column count runs in `r7` (the frame pointer), saved and
+/// restored around the loop. Rows shorter than `xd` leave it untouched.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn residual_products_8(
+    gx: &[i16],
+    gy: &[i16],
+    vx: &[i32],
+    vy: &[i32],
+    high: &[i32],
+    low: &[i32],
+    xd: &mut [f32],
+    yd: &mut [f32],
+) {
+    let len = xd.len();
+    let (Some(gx), Some(gy), Some(vx), Some(vy), Some(high), Some(low), Some(yd)) = (
+        gx.get(..len),
+        gy.get(..len),
+        vx.get(..len),
+        vy.get(..len),
+        high.get(..len),
+        low.get(..len),
+        yd.get_mut(..len),
+    ) else {
+        return;
+    };
+    if len == 0 {
+        return;
+    }
+    // SAFETY: each pointer reads (writes: `xd`, `yd`) `len` elements of its
+    // own slice, at least `len` long; `VSTM` needs word alignment, which
+    // `f32` rows have. `r7` is pushed before it counts and popped after
+    // (the block uses the stack for that one word); `s0`–`s2` and the
+    // flags are clobbered.
+    unsafe {
+        core::arch::asm!(
+            "push {{r7}}",
+            "mov r7, {n}",
+            "2:",
+            "ldrsh {x}, [{gx}], #2",
+            "ldrsh {n}, [{gy}], #2",
+            "vmov s1, s2, {x}, {n}",
+            "ldr {lo}, [{low}], #4",
+            "mov {hi}, #0",
+            "ldr {t}, [{vx}], #4",
+            "smlal {lo}, {hi}, {x}, {t}",
+            "ldr {t}, [{vy}], #4",
+            "smlal {lo}, {hi}, {n}, {t}",
+            "lsr {lo}, {lo}, #8",
+            "orr {lo}, {lo}, {hi}, lsl #24",
+            "ldr {t}, [{high}], #4",
+            "sub {lo}, {t}, {lo}",
+            "vmov s0, {lo}",
+            "vcvt.f32.s32 s0, s0, #20",
+            "vcvt.f32.s32 s1, s1",
+            "vcvt.f32.s32 s2, s2",
+            "vmul.f32 s1, s1, s0",
+            "vmul.f32 s2, s2, s0",
+            "vstmia {xd}!, {{s1}}",
+            "vstmia {yd}!, {{s2}}",
+            "subs r7, #1",
+            "bne 2b",
+            "pop {{r7}}",
+            gx = inout(reg) gx.as_ptr() => _,
+            gy = inout(reg) gy.as_ptr() => _,
+            vx = inout(reg) vx.as_ptr() => _,
+            vy = inout(reg) vy.as_ptr() => _,
+            high = inout(reg) high.as_ptr() => _,
+            low = inout(reg) low.as_ptr() => _,
+            xd = inout(reg) xd.as_mut_ptr() => _,
+            yd = inout(reg) yd.as_mut_ptr() => _,
+            n = inout(reg) len => _,
+            x = out(reg) _,
+            lo = out(reg) _,
+            hi = out(reg) _,
+            t = out(reg) _,
+            out("s0") _,
+            out("s1") _,
+            out("s2") _,
+        );
+    }
+}
+
+/// The Sobel gradients `X, Y` of every column (`wide_products::gradients_of`)
+/// from `p0`'s rows above, at and below it, one column wider either side:
+/// column sums `u + 2m + d` and differences `d − u` carried from column to
+/// column, two columns a step (the carried values move back into place at
+/// the step's end). Rows shorter than `gx` leave it untouched.
+pub(crate) fn gradients(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
+    let len = gx.len();
+    let (Some(up), Some(mid), Some(down), Some(gy)) = (
+        up.get(..len + 2),
+        mid.get(..len + 2),
+        down.get(..len + 2),
+        gy.get_mut(..len),
+    ) else {
+        return;
+    };
+    let column = |k: usize| {
+        let (u, m, d) = (i32::from(up[k]), i32::from(mid[k]), i32::from(down[k]));
+        (u + 2 * m + d, d - u)
+    };
+    let ((mut sum0, mut diff0), (sum1, mut diff1)) = (column(0), column(1));
+    let pairs = len / 2;
+    if pairs > 0 {
+        let (Some(up), Some(mid), Some(down)) = (up.get(2..), mid.get(2..), down.get(2..)) else {
+            return;
+        };
+        // SAFETY: each pointer reads (writes: `gx`, `gy`) `2 · pairs ≤ len`
+        // elements of its own slice, at least `len` long (the inputs from
+        // their third column). Flags are clobbered.
+        unsafe {
+            core::arch::asm!(
+                "2:",
+                "ldrb {u}, [{up}], #1",
+                "ldrb {m}, [{mid}], #1",
+                "ldrb {x}, [{down}], #1",
+                "add {m}, {u}, {m}, lsl #1",
+                "add {m}, {m}, {x}",
+                "sub {x}, {x}, {u}",
+                "sub {u}, {m}, {s0}",
+                "strh {u}, [{gx}], #2",
+                "add {u}, {d0}, {d1}, lsl #1",
+                "add {u}, {u}, {x}",
+                "strh {u}, [{gy}], #2",
+                // Now s0 = s1, s1 = m, d0 = d1, d1 = x; the second column.
+                "ldrb {u}, [{up}], #1",
+                "ldrb {s0}, [{mid}], #1",
+                "ldrb {d0}, [{down}], #1",
+                "add {s0}, {u}, {s0}, lsl #1",
+                "add {s0}, {s0}, {d0}",
+                "sub {d0}, {d0}, {u}",
+                "sub {u}, {s0}, {s1}",
+                "strh {u}, [{gx}], #2",
+                "add {u}, {d1}, {x}, lsl #1",
+                "add {u}, {u}, {d0}",
+                "strh {u}, [{gy}], #2",
+                // s0 = m, s1 = s0 (this column's sum), d0 = x, d1 = d0.
+                "mov {s1}, {s0}",
+                "mov {s0}, {m}",
+                "mov {d1}, {d0}",
+                "mov {d0}, {x}",
+                "subs {n}, #1",
+                "bne 2b",
+                up = inout(reg) up.as_ptr() => _,
+                mid = inout(reg) mid.as_ptr() => _,
+                down = inout(reg) down.as_ptr() => _,
+                gx = inout(reg) gx.as_mut_ptr() => _,
+                gy = inout(reg) gy.as_mut_ptr() => _,
+                n = inout(reg) pairs => _,
+                s0 = inout(reg) sum0,
+                s1 = inout(reg) sum1 => _,
+                d0 = inout(reg) diff0,
+                d1 = inout(reg) diff1,
+                u = out(reg) _,
+                m = out(reg) _,
+                x = out(reg) _,
+                options(nostack),
+            );
+        }
+    }
+    if len % 2 == 1 {
+        let i = len - 1;
+        let (sum2, diff2) = column(i + 2);
+        gx[i] = (sum2 - sum0) as i16;
+        gy[i] = (diff0 + 2 * diff1 + diff2) as i16;
+    }
+}

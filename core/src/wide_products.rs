@@ -74,6 +74,10 @@ pub(crate) fn products_row(
     ) else {
         return;
     };
+    // The M4F and M7 run two of the loops in assembly (`m4`).
+    #[cfg(fpu_f32)]
+    crate::m4::gradients(up, mid, down, gx, gy);
+    #[cfg(not(fpu_f32))]
     gradients_of(up, mid, down, gx, gy);
     int_products_of(gx, gy, xx, xy, yy);
     divergence_of(vx, vy_up, vy_down, high);
@@ -81,6 +85,9 @@ pub(crate) fn products_row(
     // σ is 8 for every `s ≥ 1/1024`: its shifts are constants there.
     if shift == 8 {
         residual_base_of::<8>(kappa, shift, p0, d, high, low);
+        #[cfg(fpu_f32)]
+        crate::m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
+        #[cfg(not(fpu_f32))]
         residual_products_of::<8>(shift, gx, gy, vx, vy, high, low, xd, yd);
     } else {
         residual_base_of::<0>(kappa, shift, p0, d, high, low);
@@ -103,7 +110,8 @@ fn one_column_a_step() {
 /// differences `d − u` (±255) carried from column to column, three loads a
 /// column.
 #[inline(never)]
-fn gradients_of(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
+#[cfg_attr(fpu_f32, allow(dead_code))] // there `m4::gradients`'s twin (`kernel_check`)
+pub(crate) fn gradients_of(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
     let len = gx.len();
     let (Some(up), Some(mid), Some(down), Some(gy)) = (
         up.get(..len + 2),
@@ -208,7 +216,7 @@ fn residual_base_of<const S: u32>(
 /// `X·Dn′·2⁻²⁰` and `Y·Dn′·2⁻²⁰` from the gradients, `V` and `H, L`.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn residual_products_of<const S: u32>(
+pub(crate) fn residual_products_of<const S: u32>(
     shift: u32,
     gx: &[i16],
     gy: &[i16],
