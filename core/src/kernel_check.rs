@@ -20,11 +20,13 @@ pub fn run() -> Result<usize, &'static str> {
 mod m4 {
     use super::LEN;
     use crate::m4;
+    use crate::sink::portable_rgb_tail;
     use crate::stages::{
         rolled_binomial_of, running_binomial, sliding_binomial, vertical_parts_of,
     };
     use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
-    use crate::{Config, IntensityScale, Params, wide_products};
+    use crate::{ByteScale, Config, IntensityScale, Params, wide_products};
+    use fixed::types::U16F16;
 
     /// xorshift64: values across a range, and its ends one time in four.
     struct Values(u64);
@@ -55,6 +57,7 @@ mod m4 {
             rows += binomials(&mut values, len)?;
             rows += vertical_parts(&mut values, len)?;
             rows += products(&mut values, len)?;
+            rows += bytes(&mut values, len)?;
             rows += magnitudes(&mut values, len)?;
         }
         Ok(rows)
@@ -174,6 +177,52 @@ mod m4 {
             return Err("residual_products_8");
         }
         Ok(2)
+    }
+
+    /// The representation's bytes from magnitudes of every size (zero,
+    /// tiny, past the top byte), under fixed gains and per-frame min–max
+    /// maps.
+    fn bytes(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let mut row = || -> [f32; LEN] {
+            core::array::from_fn(|_| {
+                let v = values.next();
+                f32::from_bits((v as u32 >> 9) | 0x3000_0000)
+                    * [0.0, 1.0, 64.0, 1e6][(v >> 40) as usize % 4]
+            })
+        };
+        let (m_d, m_c) = (row(), row());
+        let luma: [u8; LEN] = core::array::from_fn(|_| values.next() as u8);
+        let mut rows = 0;
+        for (scale_d, scale_c) in [
+            (
+                ByteScale::fixed(U16F16::from_num(8)),
+                ByteScale::fixed(U16F16::from_num(32)),
+            ),
+            (
+                ByteScale::min_max(0.001, 3.5),
+                ByteScale::min_max(0.0, 1e-3),
+            ),
+        ] {
+            let (mut want, mut got) = ([[0u8; 3]; LEN], [[0u8; 3]; LEN]);
+            portable_rgb_tail(
+                &m_d[..len],
+                &m_c[..len],
+                &luma[..len],
+                [&scale_d, &scale_c],
+                &mut want[..len],
+            );
+            m4::rgb_row(
+                [&m_d[..len], &m_c[..len]],
+                &luma[..len],
+                [scale_d.parts(), scale_c.parts()],
+                &mut got[..len],
+            );
+            if want != got {
+                return Err("rgb_row");
+            }
+            rows += 1;
+        }
+        Ok(rows)
     }
 
     /// Both magnitudes against the portable tail, on structure sums built

@@ -726,3 +726,77 @@ pub(crate) fn gradients(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: 
         gy[i] = (diff0 + 2 * diff1 + diff2) as i16;
     }
 }
+
+/// The representation's bytes of a row segment (`sink::rgb_row` on the
+/// scalar boards): per pixel `min(255, max(0, ⌊(m − offset) · gain + ½⌋))`
+/// of both magnitudes, each step one correctly rounded `f32` operation in
+/// the portable order, `VCVT` truncating toward zero and saturating (NaN to
+/// 0) as Rust's `as i32` does, then `USAT` for the clamp, and `fⁿ` beside
+/// them. `scales` are `[offset, gain]` of `|v_d|` and of `|v_c|`. Rows
+/// shorter than `out` leave it untouched.
+pub(crate) fn rgb_row(
+    [m_d, m_c]: [&[f32]; 2],
+    luma: &[u8],
+    [[offset_d, gain_d], [offset_c, gain_c]]: [[f32; 2]; 2],
+    out: &mut [[u8; 3]],
+) {
+    let n = out.len();
+    let (Some(m_d), Some(m_c), Some(luma)) = (m_d.get(..n), m_c.get(..n), luma.get(..n)) else {
+        return;
+    };
+    if n == 0 {
+        return;
+    }
+    // SAFETY: each pointer reads (writes: `out`, three bytes a pixel) `n`
+    // pixels of its own slice, at least `n` long; `VLDM` needs word
+    // alignment, which `f32` rows have. `s0`, `s1`, `s8`–`s12` and the
+    // flags are clobbered.
+    unsafe {
+        core::arch::asm!(
+            "vmov s8, s9, {od}, {gd}",
+            "vmov s10, s11, {oc}, {gc}",
+            "vmov s12, {half}",
+            "2:",
+            "vldmia {md}!, {{s0}}",
+            "vldmia {mc}!, {{s1}}",
+            "vsub.f32 s0, s0, s8",
+            "vsub.f32 s1, s1, s10",
+            "vmul.f32 s0, s0, s9",
+            "vmul.f32 s1, s1, s11",
+            "vadd.f32 s0, s0, s12",
+            "vadd.f32 s1, s1, s12",
+            "vcvt.s32.f32 s0, s0",
+            "vcvt.s32.f32 s1, s1",
+            "vmov {r}, {g}, s0, s1",
+            "usat {r}, #8, {r}",
+            "usat {g}, #8, {g}",
+            "ldrb {b}, [{luma}], #1",
+            "strb {r}, [{out}], #1",
+            "strb {g}, [{out}], #1",
+            "strb {b}, [{out}], #1",
+            "subs {n}, #1",
+            "bne 2b",
+            md = inout(reg) m_d.as_ptr() => _,
+            mc = inout(reg) m_c.as_ptr() => _,
+            luma = inout(reg) luma.as_ptr() => _,
+            out = inout(reg) out.as_mut_ptr() => _,
+            n = inout(reg) n => _,
+            od = in(reg) offset_d.to_bits(),
+            gd = in(reg) gain_d.to_bits(),
+            oc = in(reg) offset_c.to_bits(),
+            gc = in(reg) gain_c.to_bits(),
+            half = in(reg) 0.5f32.to_bits(),
+            r = out(reg) _,
+            g = out(reg) _,
+            b = out(reg) _,
+            out("s0") _,
+            out("s1") _,
+            out("s8") _,
+            out("s9") _,
+            out("s10") _,
+            out("s11") _,
+            out("s12") _,
+            options(nostack),
+        );
+    }
+}
