@@ -21,9 +21,7 @@ mod m4 {
     use super::LEN;
     use crate::m4;
     use crate::sink::portable_rgb_tail;
-    use crate::stages::{
-        rolled_binomial_of, running_binomial, sliding_binomial, vertical_parts_of,
-    };
+    use crate::stages::{binomial_of, running_binomial, sliding_binomial, vertical_parts_of};
     use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
     use crate::{ByteScale, Config, IntensityScale, Params, wide_products};
     use fixed::types::U16F16;
@@ -75,14 +73,14 @@ mod m4 {
         });
         let [a, b, c, d, e] = ints.each_ref().map(|r| &r[..len]);
         let (mut want, mut got) = ([0i32; LEN], [0i32; LEN]);
-        rolled_binomial_of(a, b, c, d, e, &mut want[..len]);
+        binomial_of(a, b, c, d, e, &mut want[..len]);
         m4::binomial_i32([a, b, c, d, e], &mut got[..len]);
         if want != got {
             return Err("binomial_i32");
         }
         let [a, b, c, d, e] = floats.each_ref().map(|r| &r[..len]);
         let (mut want, mut got) = ([0f32; LEN], [0f32; LEN]);
-        rolled_binomial_of(a, b, c, d, e, &mut want[..len]);
+        binomial_of(a, b, c, d, e, &mut want[..len]);
         m4::binomial_f32([a, b, c, d, e], &mut got[..len]);
         if want.map(f32::to_bits) != got.map(f32::to_bits) {
             return Err("binomial_f32");

@@ -17,6 +17,12 @@
 //! and touches no other memory, no stack and only the registers it names.
 #![allow(unsafe_code)]
 
+/// Whether every row the assembly reads holds the `n` elements it reads
+/// (a row shorter than its loop leaves the output untouched).
+fn hold(lens: &[usize], n: usize) -> bool {
+    n > 0 && lens.iter().all(|&len| len >= n)
+}
+
 /// `out[i] = (a + e) + 4(b + d) + 6c` of the five rows' `i`-th values,
 /// exactly (`stages::Sample::binomial` for `i32`): as
 /// `(a + e) + 4b + 4d + 4c + 2c`, two columns a step. Rows shorter than
@@ -263,12 +269,7 @@ pub(crate) fn divergence_free_magnitudes(
     m_d: &mut [f32],
 ) {
     let n = m_d.len();
-    let (Some(a), Some(b), Some(c), Some(p), Some(q)) =
-        (a.get(..n), b.get(..n), c.get(..n), p.get(..n), q.get(..n))
-    else {
-        return;
-    };
-    if n == 0 {
+    if !hold(&[a.len(), b.len(), c.len(), p.len(), q.len()], n) {
         return;
     }
     // SAFETY: each pointer reads (writes: `m_d`) `n` elements of its own
@@ -346,10 +347,7 @@ pub(crate) fn divergence_free_magnitudes(
 /// order. Rows shorter than `m_c` leave it untouched.
 pub(crate) fn curl_free_magnitudes(v_c: f32, vx: &[i32], vy: &[i32], m_c: &mut [f32]) {
     let n = m_c.len();
-    let (Some(vx), Some(vy)) = (vx.get(..n), vy.get(..n)) else {
-        return;
-    };
-    if n == 0 {
+    if !hold(&[vx.len(), vy.len()], n) {
         return;
     }
     // SAFETY: as in `divergence_free_magnitudes`; `s0`–`s3` are clobbered.
@@ -573,18 +571,16 @@ pub(crate) fn residual_products_8(
     yd: &mut [f32],
 ) {
     let len = xd.len();
-    let (Some(gx), Some(gy), Some(vx), Some(vy), Some(high), Some(low), Some(yd)) = (
-        gx.get(..len),
-        gy.get(..len),
-        vx.get(..len),
-        vy.get(..len),
-        high.get(..len),
-        low.get(..len),
-        yd.get_mut(..len),
-    ) else {
-        return;
-    };
-    if len == 0 {
+    let rows = [
+        gx.len(),
+        gy.len(),
+        vx.len(),
+        vy.len(),
+        high.len(),
+        low.len(),
+        yd.len(),
+    ];
+    if !hold(&rows, len) {
         return;
     }
     // SAFETY: each pointer reads (writes: `xd`, `yd`) `len` elements of its
@@ -647,23 +643,16 @@ pub(crate) fn residual_products_8(
 /// column, two columns a step (the carried values move back into place at
 /// the step's end). Rows shorter than `gx` leave it untouched.
 pub(crate) fn gradients(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
+    use crate::wide_products::{gradient_column, gradient_rows};
     let len = gx.len();
-    let (Some(up), Some(mid), Some(down), Some(gy)) = (
-        up.get(..len + 2),
-        mid.get(..len + 2),
-        down.get(..len + 2),
-        gy.get_mut(..len),
-    ) else {
+    let (Some(rows), Some(gy)) = (gradient_rows([up, mid, down], len), gy.get_mut(..len)) else {
         return;
     };
-    let column = |k: usize| {
-        let (u, m, d) = (i32::from(up[k]), i32::from(mid[k]), i32::from(down[k]));
-        (u + 2 * m + d, d - u)
-    };
+    let column = |k: usize| gradient_column(rows, k);
     let ((mut sum0, mut diff0), (sum1, mut diff1)) = (column(0), column(1));
     let pairs = len / 2;
     if pairs > 0 {
-        let (Some(up), Some(mid), Some(down)) = (up.get(2..), mid.get(2..), down.get(2..)) else {
+        let [Some(up), Some(mid), Some(down)] = rows.map(|row| row.get(2..)) else {
             return;
         };
         // SAFETY: each pointer reads (writes: `gx`, `gy`) `2 · pairs ≤ len`
@@ -741,10 +730,7 @@ pub(crate) fn rgb_row(
     out: &mut [[u8; 3]],
 ) {
     let n = out.len();
-    let (Some(m_d), Some(m_c), Some(luma)) = (m_d.get(..n), m_c.get(..n), luma.get(..n)) else {
-        return;
-    };
-    if n == 0 {
+    if !hold(&[m_d.len(), m_c.len(), luma.len()], n) {
         return;
     }
     // SAFETY: each pointer reads (writes: `out`, three bytes a pixel) `n`

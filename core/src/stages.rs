@@ -58,7 +58,7 @@ pub trait Sample: Copy + Default + Add<Output = Self> {
     #[inline(always)]
     fn binomial_rows(rows: [&[Self]; 5], out: &mut [Self]) {
         let [a, b, c, d, e] = rows;
-        rolled_binomial_of(a, b, c, d, e, out);
+        binomial_of(a, b, c, d, e, out);
     }
 
     /// The horizontal binomial of `out.len() + 4` taps on the scalar
@@ -143,31 +143,6 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
     }
 }
 
-/// [`binomial_of`] on the scalar boards, one column a step.
-#[inline(never)]
-pub(crate) fn rolled_binomial_of<T: Sample>(
-    a: &[T],
-    b: &[T],
-    c: &[T],
-    d: &[T],
-    e: &[T],
-    out: &mut [T],
-) {
-    let len = out.len();
-    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
-        a.get(..len),
-        b.get(..len),
-        c.get(..len),
-        d.get(..len),
-        e.get(..len),
-    ) else {
-        return;
-    };
-    for i in 0..len {
-        out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
-    }
-}
-
 /// `out[i] = G` of the five rows' `i`-th values. Every row a parameter of
 /// its own (the hot loops' pattern, here and in `tail`): Rust tells the
 /// compiler that references passed so do not alias. Rows reached through
@@ -182,7 +157,7 @@ pub(crate) fn rolled_binomial_of<T: Sample>(
 /// loop is a function of its own.
 #[cfg_attr(dispatched_pass, inline(always))]
 #[cfg_attr(not(dispatched_pass), inline(never))]
-fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
+pub(crate) fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
     let len = out.len();
     let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
         a.get(..len),
@@ -473,27 +448,44 @@ fn boundary_minus_domain_y(v3: [i32; 5], v4: [i32; 5]) -> i32 {
     e
 }
 
+/// [`e_row_taps`]: the first part's two taps, its rest, the second part's
+/// four taps, its rest.
+type ERowTaps<'a> = ([i32; 2], &'a [i16], [i32; 4], &'a [i16]);
+
+/// What the scalar rows of `E` read for `len` outputs, from vertical parts
+/// two columns wider either side: the first part's taps left of the first
+/// output and its taps from the first right of it on, the second part's
+/// first four taps and the rest (`None` if a part is short). Iterated by
+/// the rows, not indexed: no bounds check (and no panic path) in any build,
+/// however little it knows of the lengths.
+#[inline(always)]
+fn e_row_taps<'a>(first: &'a [i16], second: &'a [i16], len: usize) -> Option<ERowTaps<'a>> {
+    let (&[l0, l1], rest) = (first.get(1..3)?, first.get(3..len + 3)?) else {
+        return None;
+    };
+    let (&[w0, w1, w2, w3], tail) = (second.get(..4)?, second.get(4..len + 4)?) else {
+        return None;
+    };
+    Some((
+        [l0, l1].map(i32::from),
+        rest,
+        [w0, w1, w2, w3].map(i32::from),
+        tail,
+    ))
+}
+
 /// `E` x of a row on the scalar boards, from its vertical parts two
 /// columns wider either side, as [`boundary_minus_domain_x`] with the taps
 /// carried from column to column: with the pair sums `u[k] = v2[k] +
 /// v2[k+1]`, `Box⋆Sobx = u[i+1] − u[i−2]`. Two loads a column.
 #[inline(never)]
 fn boundary_minus_domain_x_row(v1: &[i16], v2: &[i16], out: &mut [i32]) {
-    let len = out.len();
-    // Iterated, not indexed: no bounds check (and no panic path) in any
-    // build, however little it knows of the lengths.
-    let (Some(&[l0, l1]), Some(v1), Some(&[w0, w1, w2, w3]), Some(v2)) = (
-        v1.get(1..3),
-        v1.get(3..len + 3),
-        v2.get(..4),
-        v2.get(4..len + 4),
-    ) else {
+    let Some(([l0, l1], v1, [w0, w1, w2, w3], v2)) = e_row_taps(v1, v2, out.len()) else {
         return;
     };
-    let [w0, w1, w2, w3] = [w0, w1, w2, w3].map(i32::from);
     // `v1` from the column left of the first output; the pair sums left of
     // it (u[i−2], u[i−1], u[i]) and the last tap of `v2` (v2[i+1]).
-    let (mut left, mut mid) = (i32::from(l0), i32::from(l1));
+    let (mut left, mut mid) = (l0, l1);
     let (mut u0, mut u1, mut u2, mut last) = (w0 + w1, w1 + w2, w2 + w3, w3);
     for ((o, &right), &next) in out.iter_mut().zip(v1).zip(v2) {
         let (right, next) = (i32::from(right), i32::from(next));
@@ -510,17 +502,10 @@ fn boundary_minus_domain_x_row(v1: &[i16], v2: &[i16], out: &mut [i32]) {
 /// and `b[k] = a[k−1] + a[k]`, `Box⋆Soby = b[i−1] + b[i] + b[i+1]`.
 #[inline(never)]
 fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
-    let len = out.len();
-    let (Some(&[l0, l1]), Some(v3), Some(&[w0, w1, w2, w3]), Some(v4)) = (
-        v3.get(1..3),
-        v3.get(3..len + 3),
-        v4.get(..4),
-        v4.get(4..len + 4),
-    ) else {
+    let Some(([l0, l1], v3, [w0, w1, w2, w3], v4)) = e_row_taps(v3, v4, out.len()) else {
         return;
     };
-    let [w0, w1, w2, w3] = [w0, w1, w2, w3].map(i32::from);
-    let (mut left, mut mid) = (i32::from(l0), i32::from(l1));
+    let (mut left, mut mid) = (l0, l1);
     // a[i−1] .. a[i+1] need v4 up to i+2; before the first column:
     // b[i−1] = a[i−2] + a[i−1], b[i] = a[i−1] + a[i], and a[i].
     let (a0, a1, a2) = (w0 + w1, w1 + w2, w2 + w3);
@@ -673,6 +658,16 @@ fn products_row(
     scratch: ScratchRows<'_>,
     cols: core::ops::Range<usize>,
 ) {
+    let (start, len) = (cols.start, cols.len());
+    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
+        cut_mut(xx, start, len),
+        cut_mut(xy, start, len),
+        cut_mut(yy, start, len),
+        cut_mut(xd, start, len),
+        cut_mut(yd, start, len),
+    ) else {
+        return;
+    };
     if cfg!(fpu_f32) {
         crate::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
     } else {
@@ -680,7 +675,8 @@ fn products_row(
     }
 }
 
-/// [`products_row`] on the targets other than the M4F.
+/// [`products_row`] on the targets other than the M4F, into product rows
+/// already cut to the columns.
 #[inline(always)]
 pub(crate) fn portable_products_row(
     input: &ResidualInputs<'_>,
@@ -730,16 +726,6 @@ pub(crate) fn portable_products_row(
         at8(p_down, 1),
         at8(p_down, 2),
         cut(d, cols.start, len),
-    ) else {
-        return;
-    };
-    let start = cols.start;
-    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        cut_mut(xx, start, len),
-        cut_mut(xy, start, len),
-        cut_mut(yy, start, len),
-        cut_mut(xd, start, len),
-        cut_mut(yd, start, len),
     ) else {
         return;
     };

@@ -22,8 +22,9 @@
 
 use crate::stages::{DN_SCALE, ResidualInputs, ScratchRows, cut, cut_mut};
 
-/// `X², XY, Y²` and `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on columns `cols` of the
-/// product rows (`stages::products_row`'s on the M4F); rows the memory
+/// `X², XY, Y²` and `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on columns `cols`, into
+/// product rows already cut to them (`stages::products_row`'s on the M4F);
+/// rows the memory
 /// cannot serve (never, once an engine has validated it) leave them
 /// untouched.
 pub(crate) fn products_row(
@@ -57,15 +58,6 @@ pub(crate) fn products_row(
         return;
     };
     let ScratchRows { gx, gy, high, low } = scratch;
-    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        cut_mut(xx, start, len),
-        cut_mut(xy, start, len),
-        cut_mut(yy, start, len),
-        cut_mut(xd, start, len),
-        cut_mut(yd, start, len),
-    ) else {
-        return;
-    };
     let (Some(gx), Some(gy), Some(high), Some(low)) = (
         cut_mut(gx, start, len),
         cut_mut(gy, start, len),
@@ -113,18 +105,10 @@ fn one_column_a_step() {
 #[cfg_attr(fpu_f32, allow(dead_code))] // there `m4::gradients`'s twin (`kernel_check`)
 pub(crate) fn gradients_of(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
     let len = gx.len();
-    let (Some(up), Some(mid), Some(down), Some(gy)) = (
-        up.get(..len + 2),
-        mid.get(..len + 2),
-        down.get(..len + 2),
-        gy.get_mut(..len),
-    ) else {
+    let (Some(rows), Some(gy)) = (gradient_rows([up, mid, down], len), gy.get_mut(..len)) else {
         return;
     };
-    let column = |k: usize| {
-        let (u, m, d) = (i32::from(up[k]), i32::from(mid[k]), i32::from(down[k]));
-        (u + 2 * m + d, d - u)
-    };
+    let column = |k: usize| gradient_column(rows, k);
     let ((mut sum0, mut diff0), (mut sum1, mut diff1)) = (column(0), column(1));
     for i in 0..len {
         one_column_a_step();
@@ -133,6 +117,25 @@ pub(crate) fn gradients_of(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], g
         gy[i] = (diff0 + 2 * diff1 + diff2) as i16;
         (sum0, sum1, diff0, diff1) = (sum1, sum2, diff1, diff2);
     }
+}
+
+/// `p0`'s rows above, at and below `len` columns, one column wider either
+/// side (`None` if one is shorter).
+#[inline(always)]
+pub(crate) fn gradient_rows([up, mid, down]: [&[u8]; 3], len: usize) -> Option<[&[u8]; 3]> {
+    Some([
+        up.get(..len + 2)?,
+        mid.get(..len + 2)?,
+        down.get(..len + 2)?,
+    ])
+}
+
+/// Column `k`'s sum `u + 2m + d` and difference `d − u`.
+#[inline(always)]
+pub(crate) fn gradient_column([up, mid, down]: [&[u8]; 3], k: usize) -> (i32, i32) {
+    let at = |row: &[u8]| row.get(k).copied().map_or(0, i32::from);
+    let (u, m, d) = (at(up), at(mid), at(down));
+    (u + 2 * m + d, d - u)
 }
 
 /// `X², XY, Y²` (each `≤ 1020²`).
@@ -303,8 +306,9 @@ mod tests {
                     [(); 2].map(|_| std::vec![0.0; n]),
                 );
                 let (mut got_i, mut got_f) = (want_i.clone(), want_f.clone());
-                let [xx, xy, yy] = want_i.each_mut().map(|r| &mut r[..]);
-                let [xd, yd] = want_f.each_mut().map(|r| &mut r[..]);
+                // Product rows cut to the columns, as `stages::products_row` hands them.
+                let [xx, xy, yy] = want_i.each_mut().map(|r| &mut r[cols.clone()]);
+                let [xd, yd] = want_f.each_mut().map(|r| &mut r[cols.clone()]);
                 portable_products_row(&input, xx, xy, yy, xd, yd, cols.clone());
                 let (mut gx, mut gy, mut high, mut low) = (
                     std::vec![0; n],
@@ -320,8 +324,8 @@ mod tests {
                 };
                 products_row(
                     &input,
-                    got_i.each_mut().map(|r| &mut r[..]),
-                    got_f.each_mut().map(|r| &mut r[..]),
+                    got_i.each_mut().map(|r| &mut r[cols.clone()]),
+                    got_f.each_mut().map(|r| &mut r[cols.clone()]),
                     scratch,
                     cols,
                 );
