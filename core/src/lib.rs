@@ -60,8 +60,8 @@
 // on stable, `libm`'s is software there), and the byte conversion of a
 // clamped value, whose checked form kept the x86-64 byte loops scalar (193
 // instructions for 32 bytes against 57); in `m4.rs`, the M4F's and M7's
-// hottest row loops in `asm!` (443 → 336 instructions a pixel at 320×240
-// with `wide_products`), held equal to their portable twins by
+// hottest row loops in `asm!` (with `wide_products`, 443 → 306
+// instructions a pixel at 320×240), held equal to their portable twins by
 // `kernel_check` on the emulated boards.
 #![deny(unsafe_code)]
 #![deny(missing_docs)]

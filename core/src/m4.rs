@@ -1,20 +1,25 @@
 //! The Cortex-M4F and M7 forms (`fpu_f32`: 32-bit Arm, hard float) of the
-//! row loops where the compiler's own code spends the most: the vertical
+//! row loops where the compiler's own code spent the most: the vertical
 //! binomials two columns a step, one double-word load per row (`LDRD`,
-//! `VLDM`).
+//! `VLDM`); the horizontal ones with their taps carried in registers that
+//! trade roles; `E`'s vertical parts in the 16-bit halves of a word
+//! (`SADD16`, `SSUB16`); the Sobel gradients; the residual's products by
+//! `SMLAL`; the magnitudes; the bytes.
 //!
 //! Why assembly: compiled from Rust, these loops ran unrolled two to four
 //! times with every row's pointer and every column's values live at once,
 //! more than the M4's 13 registers, and spilled (16 instructions a column
-//! of the integer binomial where 9 do). Each loop here computes exactly what
-//! its portable twin computes, in the same order where it is `f32`
-//! (`stages`), and the firmware's kernel check (`check`, run on the
-//! emulated M4 and M7 by `scripts/embedded-check`) holds each equal to its
-//! twin on rows at their bounds and random ones.
+//! of the integer binomial where 9 do), and their counts moved with what
+//! the compiler knew of the row's length (the C API's memory of run-time
+//! width counted 5 % more than the Rust firmware's arrays). Each loop here
+//! computes exactly what its portable twin computes, in the same order
+//! where it is `f32`, and `kernel_check` (run by the firmware on the
+//! emulated M4 and M7, `scripts/embedded-check`) holds each equal to its
+//! twin on rows at their bounds and random ones, every length up to 41.
 //!
-//! Every loop reads and writes only the rows it is given, each cut to the
-//! loop's length before the assembly runs (`pairs` double-words of each),
-//! and touches no other memory, no stack and only the registers it names.
+//! Every loop reads and writes only the rows it is given, after checking
+//! they hold what it reads, and touches no other memory and only the
+//! registers it names; one saves `r7` on the stack while it counts there.
 #![allow(unsafe_code)]
 
 /// Whether every row the assembly reads holds the `n` elements it reads

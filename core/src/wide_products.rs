@@ -2,9 +2,10 @@
 //! five short loops, the residual with 64-bit multiply-accumulates
 //! (`SMULL`/`SMLAL`), where `stages::products_of` is one loop over 22 rows
 //! with the residual in 32-bit halves: more rows than the M4 has registers
-//! (127 instructions a column, against 74 here; `scripts/embedded-check`'s
-//! profile). Same values: every product is exact, and `Dn′` is
-//! `stages::rounded_residual`'s (`wide_products_are_the_products`).
+//! (127 instructions a column, against 77 here with the gradients and the
+//! last loop in assembly, `m4`; `scripts/embedded-check`'s profile). Same
+//! values: every product is exact, and `Dn′` is `stages::rounded_residual`'s
+//! (`wide_products_are_the_products`).
 //!
 //! | quantity | format | bound |
 //! |---|---|---|
