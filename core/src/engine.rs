@@ -19,8 +19,8 @@ use crate::schedule::{
     V_START,
 };
 use crate::stages::{
-    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, StructureRows, boundary_minus_domain, smooth,
-    structure_row, vertical_binomial,
+    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
+    boundary_minus_domain, smooth, structure_row, vertical_binomial,
 };
 use crate::tail::{TailConstants, TailOut, TailRows, tail_row};
 use crate::{Config, Error, Fields, Job, Pixels, Tile};
@@ -351,8 +351,7 @@ struct Rows<'m> {
 impl<'m> Rows<'m> {
     /// The vertical G of the five sums centred on window row `o`, into the
     /// product rows (free by then).
-    #[cfg_attr(feature = "profile", inline(never))]
-    #[cfg_attr(not(feature = "profile"), inline(always))]
+    #[inline(always)]
     fn structure_sums(&mut self, o: usize, n: usize) {
         for (ring, out) in self.int_sums.iter().zip(self.int_products.iter_mut()) {
             vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
@@ -534,6 +533,12 @@ impl Pass<'_> {
                 float_products: &mut rows.float_products,
                 int_sums: rows.int_sums.each_mut().map(|ring| ring.row_mut(j)),
                 float_sums: rows.float_sums.each_mut().map(|ring| ring.row_mut(j)),
+                // Free once `E` of this push is in its ring.
+                scratch: {
+                    let [gx, gy, ..] = &mut rows.vert_d;
+                    let [high, low] = &mut rows.e_scratch;
+                    ScratchRows { gx, gy, high, low }
+                },
             };
             structure_row(&input, structure, n);
         }
@@ -543,8 +548,7 @@ impl Pass<'_> {
     }
 
     /// Solve and hand over output row `o` (window rows; `o ≥ 7`).
-    #[cfg_attr(feature = "profile", inline(never))]
-    #[cfg_attr(not(feature = "profile"), inline(always))]
+    #[inline(always)]
     fn emit<S: Sink>(&mut self, config: &Config, o: usize, sink: &mut S) {
         let Window {
             x_first,
@@ -633,8 +637,7 @@ fn from_first_output<T>(row: &[T]) -> &[T] {
 
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the
 /// frame (SPEC §2), as `p0` and `d = p1 − p0`.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d: &mut [i16]) {
     let width = prev.len().min(next.len());
     let (Some(&first), Some(&last)) = (prev.first(), prev.get(width.wrapping_sub(1))) else {

@@ -53,13 +53,16 @@
 //! Changes to them follow semantic versioning; the bytes they produce change
 //! only with a SPEC change, recorded in the repository's golden files.
 #![no_std]
-// Four `unsafe` blocks, allowed where they live (`fpu.rs`): the `f32`
-// square root on x86-64 (SSE) and aarch64 (NEON) through intrinsics, which
-// vectorise where `libm`'s inline assembly does not, and on the M4F
-// (`VSQRT.F32` in `asm!`; `core` has no `f32` root on stable, `libm`'s is
-// software there); and the byte conversion of a clamped value, whose
-// checked form kept the x86-64 byte loops scalar (193 instructions for 32
-// bytes against 57).
+// `unsafe` is allowed only where it lives, each block with its safety
+// argument: in `fpu.rs`, the `f32` square root on x86-64 (SSE) and aarch64
+// (NEON) through intrinsics, which vectorise where `libm`'s inline assembly
+// does not, and on the M4F (`VSQRT.F32` in `asm!`; `core` has no `f32` root
+// on stable, `libm`'s is software there), and the byte conversion of a
+// clamped value, whose checked form kept the x86-64 byte loops scalar (193
+// instructions for 32 bytes against 57); in `m4.rs`, the M4F's and M7's
+// hottest row loops in `asm!` (with `wide_products`, 443 → 306
+// instructions a pixel at 320×240), held equal to their portable twins by
+// `kernel_check` on the emulated boards.
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 
@@ -71,6 +74,11 @@ mod error;
 mod fpu;
 mod frames;
 mod job;
+#[cfg(feature = "kernel-check")]
+#[doc(hidden)]
+pub mod kernel_check;
+#[cfg(fpu_f32)]
+mod m4;
 mod params;
 mod pixels;
 mod plan;
@@ -82,6 +90,7 @@ mod sink;
 mod stages;
 mod stream;
 mod tail;
+mod wide_products;
 
 /// Whether the compiler takes the row loops in vector lanes (`build.rs`):
 /// there, forms that keep a loop branch-free with independent taps win; on

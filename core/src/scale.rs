@@ -83,6 +83,12 @@ impl ByteScale {
     pub fn byte(&self, m: f32) -> u8 {
         crate::fpu::byte((m - self.offset) * self.gain + 0.5)
     }
+
+    /// `[offset, gain]`.
+    #[cfg_attr(not(fpu_f32), allow(dead_code))]
+    pub(crate) fn parts(&self) -> [f32; 2] {
+        [self.offset, self.gain]
+    }
 }
 
 /// The extremes of a magnitude over a frame.

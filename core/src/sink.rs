@@ -130,9 +130,34 @@ pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out
         }
         (m_d, m_c, luma, out) = (md_rest, mc_rest, l_rest, o_rest);
     }
+    #[cfg(fpu_f32)]
+    {
+        // The M4F's loop, in assembly (`m4`), for as many pixels as all
+        // hold.
+        let n = out.len().min(m_d.len()).min(m_c.len()).min(luma.len());
+        let (Some(out), Some(luma)) = (out.get_mut(..n), luma.get(..n)) else {
+            return;
+        };
+        crate::m4::rgb_row([m_d, m_c], luma, [scale_d.parts(), scale_c.parts()], out);
+    }
+    #[cfg(not(fpu_f32))]
+    portable_rgb_tail(m_d, m_c, luma, [scale_d, scale_c], out);
+}
+
+/// [`rgb_row`]'s pixels one at a time (all of them on the scalar boards,
+/// the batches' remainder elsewhere).
+#[inline(always)]
+#[cfg_attr(fpu_f32, allow(dead_code))] // there `m4::rgb_row`'s twin (`kernel_check`)
+pub(crate) fn portable_rgb_tail(
+    m_d: &[f32],
+    m_c: &[f32],
+    luma: &[u8],
+    scales: [&ByteScale; 2],
+    out: &mut [[u8; 3]],
+) {
     let values = m_d.iter().zip(m_c).zip(luma);
     for (dst, ((&m_d, &m_c), &luma)) in out.iter_mut().zip(values) {
-        *dst = rgb_of(m_d, m_c, luma, [scale_d, scale_c]);
+        *dst = rgb_of(m_d, m_c, luma, scales);
     }
 }
 

@@ -52,6 +52,26 @@ pub trait Sample: Copy + Default + Add<Output = Self> {
 
     /// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
     fn binomial(a: Self, b: Self, c: Self, d: Self, e: Self) -> Self;
+
+    /// [`Sample::binomial`] of every column of five rows on the scalar
+    /// boards (`out.len()` columns; shorter rows leave `out` untouched).
+    #[inline(always)]
+    fn binomial_rows(rows: [&[Self]; 5], out: &mut [Self]) {
+        let [a, b, c, d, e] = rows;
+        binomial_of(a, b, c, d, e, out);
+    }
+
+    /// The horizontal binomial of `out.len() + 4` taps on the scalar
+    /// boards: [`running_binomial`] for exact sums, [`sliding_binomial`]
+    /// (the tapped order) for `f32`.
+    #[inline(always)]
+    fn binomial_taps(taps: &[Self], out: &mut [Self]) {
+        if Self::EXACT {
+            running_binomial(taps, out);
+        } else {
+            sliding_binomial(taps, out);
+        }
+    }
 }
 
 impl Sample for i32 {
@@ -60,6 +80,18 @@ impl Sample for i32 {
     #[inline(always)]
     fn binomial(a: i32, b: i32, c: i32, d: i32, e: i32) -> i32 {
         (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_rows(rows: [&[i32]; 5], out: &mut [i32]) {
+        crate::m4::binomial_i32(rows, out);
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_taps(taps: &[i32], out: &mut [i32]) {
+        crate::m4::running_binomial_i32(taps, out);
     }
 }
 
@@ -72,6 +104,18 @@ impl Sample for f32 {
     fn binomial(a: f32, b: f32, c: f32, d: f32, e: f32) -> f32 {
         ((a + e) + (b + d) * 4.0) + c * 6.0
     }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_rows(rows: [&[f32]; 5], out: &mut [f32]) {
+        crate::m4::binomial_f32(rows, out);
+    }
+
+    #[cfg(fpu_f32)]
+    #[inline(always)]
+    fn binomial_taps(taps: &[f32], out: &mut [f32]) {
+        crate::m4::sliding_binomial_f32(taps, out);
+    }
 }
 
 /// Columns `[r, n − r)` of a window of `n` columns. Rows are at least `n`
@@ -82,8 +126,7 @@ fn span(n: usize, r: usize) -> core::ops::Range<usize> {
 }
 
 /// The vertical binomial of five rows on `[r, n − r)`.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize) {
     let cols = span(n, r);
     let len = cols.len();
@@ -94,35 +137,27 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
         return;
     };
     if crate::VECTOR_ROWS {
-        return binomial_of(a, b, c, d, e, out);
-    }
-    // On the scalar boards two columns per step, both loaded before either
-    // is stored: fewer instructions per pixel on RV32 (1 230 → 1 195) and
-    // the M4 at 320×240 (851 → 843), `scripts/embedded-check`.
-    let [pa, pb, pc, pd, pe] = [a, b, c, d, e].map(|row| row.chunks_exact(2));
-    let rows = pa.zip(pb).zip(pc).zip(pd).zip(pe);
-    for (o, ((((a, b), c), d), e)) in out.chunks_exact_mut(2).zip(rows) {
-        let x0 = T::binomial(a[0], b[0], c[0], d[0], e[0]);
-        let x1 = T::binomial(a[1], b[1], c[1], d[1], e[1]);
-        o[0] = x0;
-        o[1] = x1;
-    }
-    if len % 2 == 1 {
-        let i = len - 1;
-        out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
+        binomial_of(a, b, c, d, e, opaque(out));
+    } else {
+        T::binomial_rows([a, b, c, d, e], out);
     }
 }
 
 /// `out[i] = G` of the five rows' `i`-th values. Every row a parameter of
 /// its own (the hot loops' pattern, here and in `tail`): Rust tells the
-/// compiler that references passed so do not alias, and the compiler keeps
-/// that knowledge when it inlines the function (as scopes on each load and
-/// store). Rows reached through arrays or structures carry no such
-/// promise, and where the engine's rows come from one memory the compiler
-/// must then prove them apart itself, which it did for some loops and not
-/// for others (the x86-64 pass ran its vertical sums scalar).
-#[inline(always)]
-fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
+/// compiler that references passed so do not alias. Rows reached through
+/// arrays or structures carry no such promise, and where the engine's rows
+/// come from one memory the compiler must then prove them apart itself,
+/// which it did for some loops and not for others (the x86-64 pass ran its
+/// vertical sums scalar). Inlined, the promise did not survive for every
+/// loop either when the rows' width is known only at run time (a
+/// `SliceEngine`: on aarch64 130 instructions per pixel at 640×480, against
+/// 100 with the loops out of line, `scripts/embedded-check`). So where the
+/// pass is not compiled twice (`dispatched_pass`, `build.rs`) each such
+/// loop is a function of its own.
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
+pub(crate) fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
     let len = out.len();
     let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
         a.get(..len),
@@ -151,12 +186,25 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
     // where the loads are the cost); taps where they vectorise (a running
     // sum would serialise them), and for `f32`, whose sums must keep one
     // order on every target.
-    if !crate::VECTOR_ROWS && T::EXACT {
-        if let Some(taps) = cut(row, first, len + 4) {
-            running_binomial(taps, out);
-        }
-    } else {
+    if crate::VECTOR_ROWS {
         tapped_binomial(row, first, out);
+    } else if let Some(taps) = cut(row, first, len + 4) {
+        T::binomial_taps(taps, out);
+    }
+}
+
+/// [`tapped_binomial`] on the scalar boards: the last four taps carried
+/// from column to column, one load a column, the sum in the same order.
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
+pub(crate) fn sliding_binomial<T: Sample>(taps: &[T], out: &mut [T]) {
+    let (Some(&[x0, x1, x2, x3]), Some(rest)) = (taps.get(..4), taps.get(4..)) else {
+        return;
+    };
+    let (mut a, mut b, mut c, mut d) = (x0, x1, x2, x3);
+    for (o, &e) in out.iter_mut().zip(rest) {
+        *o = T::binomial(a, b, c, d, e);
+        (a, b, c, d) = (b, c, d, e);
     }
 }
 
@@ -164,10 +212,7 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
 #[inline(always)]
 fn tapped_binomial<T: Sample>(row: &[T], first: usize, out: &mut [T]) {
     let len = out.len();
-    // Each tap cut from the row itself: cut from one slice of `len + 4`
-    // instead, aarch64 counts 347 instructions per pixel against 285
-    // (`scripts/embedded-check`); `taps5` cost the M4 24 (1 059 against
-    // 1 035 at 320×240).
+    // Each tap cut from the row itself: independent lanes to vectorise.
     let at = |shift: usize| cut(row, first.wrapping_add(shift), len);
     let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (at(0), at(1), at(2), at(3), at(4)) else {
         return;
@@ -180,8 +225,9 @@ fn tapped_binomial<T: Sample>(row: &[T], first: usize, out: &mut [T]) {
 /// `s₂ = s₁′ + s₁`, `s₃ = s₂′ + s₂` and the output `s₃′ + s₃` (primes: the
 /// previous column's). Every partial sum has nonnegative weights summing to
 /// at most 16, so it stays within the output's bound.
-#[inline(always)]
-fn running_binomial<T>(taps: &[T], out: &mut [T])
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
+pub(crate) fn running_binomial<T>(taps: &[T], out: &mut [T])
 where
     T: Copy + Add<Output = T>,
 {
@@ -210,8 +256,7 @@ pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 /// `Kby3 = [−1 0 1]ᵀ⊗[1 4 1]`, `Box⋆Soby = [−1 −1 0 1 1]ᵀ⊗[1 3 4 3 1]`:
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn boundary_minus_domain(
     d: [&[i16]; 5],
     vert: &mut [&mut [i16]; 4],
@@ -252,13 +297,18 @@ fn vertical_parts(
     ) else {
         return;
     };
+    #[cfg(fpu_f32)]
+    if crate::m4::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
+        return;
+    }
     vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
 }
 
 /// [`vertical_parts`]' loop, every output row a parameter of its own (see
 /// [`binomial_of`]); the inputs are only read.
-#[inline(always)]
-fn vertical_parts_of(
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
+pub(crate) fn vertical_parts_of(
     [d0, d1, d2, d3, d4]: [&[i16]; 5],
     v1: &mut [i16],
     v2: &mut [i16],
@@ -300,6 +350,18 @@ fn horizontal_parts(
     let (Some(ex), Some(ey)) = (cut_mut(ex, start, len), cut_mut(ey, start, len)) else {
         return;
     };
+    let (ex, ey) = (opaque(ex), opaque(ey));
+    if !crate::VECTOR_ROWS {
+        // Each part from two columns left of the first output to two right
+        // of the last.
+        let window = |row| cut(row, start.wrapping_sub(2), len + 4);
+        let [v1, v2, v3, v4] = vert.map(window);
+        if let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) {
+            boundary_minus_domain_x_row(v1, v2, ex);
+            boundary_minus_domain_y_row(v3, v4, ey);
+        }
+        return;
+    }
     // Each tap its own shifted slice: independent lanes to vectorise.
     let [v1, v2, v3, v4] = vert.map(|row| taps5(row, start, len));
     let (Some(v1), Some(v2), Some(v3), Some(v4)) = (v1, v2, v3, v4) else {
@@ -318,7 +380,8 @@ fn horizontal_parts(
 /// tap and the output a parameter of its own (see [`binomial_of`]).
 /// Counted, not enumerated: `iter_mut().enumerate()` left a bounds check
 /// (a panic path) on the taps.
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn component_of(
     formula: impl Fn([i32; 5], [i32; 5]) -> i32,
@@ -385,14 +448,87 @@ fn boundary_minus_domain_y(v3: [i32; 5], v4: [i32; 5]) -> i32 {
     e
 }
 
+/// [`e_row_taps`]: the first part's two taps, its rest, the second part's
+/// four taps, its rest.
+type ERowTaps<'a> = ([i32; 2], &'a [i16], [i32; 4], &'a [i16]);
+
+/// What the scalar rows of `E` read for `len` outputs, from vertical parts
+/// two columns wider either side: the first part's taps left of the first
+/// output and its taps from the first right of it on, the second part's
+/// first four taps and the rest (`None` if a part is short). Iterated by
+/// the rows, not indexed: no bounds check (and no panic path) in any build,
+/// however little it knows of the lengths.
+#[inline(always)]
+fn e_row_taps<'a>(first: &'a [i16], second: &'a [i16], len: usize) -> Option<ERowTaps<'a>> {
+    let (&[l0, l1], rest) = (first.get(1..3)?, first.get(3..len + 3)?) else {
+        return None;
+    };
+    let (&[w0, w1, w2, w3], tail) = (second.get(..4)?, second.get(4..len + 4)?) else {
+        return None;
+    };
+    Some((
+        [l0, l1].map(i32::from),
+        rest,
+        [w0, w1, w2, w3].map(i32::from),
+        tail,
+    ))
+}
+
+/// `E` x of a row on the scalar boards, from its vertical parts two
+/// columns wider either side, as [`boundary_minus_domain_x`] with the taps
+/// carried from column to column: with the pair sums `u[k] = v2[k] +
+/// v2[k+1]`, `Box⋆Sobx = u[i+1] − u[i−2]`. Two loads a column.
+#[inline(never)]
+fn boundary_minus_domain_x_row(v1: &[i16], v2: &[i16], out: &mut [i32]) {
+    let Some(([l0, l1], v1, [w0, w1, w2, w3], v2)) = e_row_taps(v1, v2, out.len()) else {
+        return;
+    };
+    // `v1` from the column left of the first output; the pair sums left of
+    // it (u[i−2], u[i−1], u[i]) and the last tap of `v2` (v2[i+1]).
+    let (mut left, mut mid) = (l0, l1);
+    let (mut u0, mut u1, mut u2, mut last) = (w0 + w1, w1 + w2, w2 + w3, w3);
+    for ((o, &right), &next) in out.iter_mut().zip(v1).zip(v2) {
+        let (right, next) = (i32::from(right), i32::from(next));
+        let u3 = last + next;
+        let e = (right - left) - 3 * (u3 - u0);
+        debug_assert!(e.abs() <= E_MAX, "E x = {e}");
+        *o = e;
+        (left, mid, u0, u1, u2, last) = (mid, right, u1, u2, u3, next);
+    }
+}
+
+/// `E` y of a row on the scalar boards (see [`boundary_minus_domain_x_row`]):
+/// `[1 3 4 3 1] = [1 1] ⋆ [1 1] ⋆ [1 1 1]`, so with `a[k] = v4[k] + v4[k+1]`
+/// and `b[k] = a[k−1] + a[k]`, `Box⋆Soby = b[i−1] + b[i] + b[i+1]`.
+#[inline(never)]
+fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
+    let Some(([l0, l1], v3, [w0, w1, w2, w3], v4)) = e_row_taps(v3, v4, out.len()) else {
+        return;
+    };
+    let (mut left, mut mid) = (l0, l1);
+    // a[i−1] .. a[i+1] need v4 up to i+2; before the first column:
+    // b[i−1] = a[i−2] + a[i−1], b[i] = a[i−1] + a[i], and a[i].
+    let (a0, a1, a2) = (w0 + w1, w1 + w2, w2 + w3);
+    let (mut b0, mut b1, mut a, mut last) = (a0 + a1, a1 + a2, a2, w3);
+    for ((o, &right), &next) in out.iter_mut().zip(v3).zip(v4) {
+        let (right, next) = (i32::from(right), i32::from(next));
+        let a_next = last + next;
+        let b2 = a + a_next;
+        let kb = left + 4 * mid + right;
+        let e = kb - 3 * (b0 + b1 + b2);
+        debug_assert!(e.abs() <= E_MAX, "E y = {e}");
+        *o = e;
+        (left, mid, b0, b1, a, last) = (mid, right, b1, b2, a_next, next);
+    }
+}
+
 /// `V = G256 ⋆ E` on `[4, n−4)` from the five rows of `E` centred on it,
 /// each already smoothed along the row (`boundary_minus_domain`): the
 /// vertical half. Integer sums are exact, so the order of the halves does
 /// not matter; this one keeps both halves in loops the compiler takes in
 /// vector lanes (with the horizontal half last, from a scratch row into
 /// the ring of `V`, the x86-64 pass ran it scalar).
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e_smoothed;
     vertical_binomial(ex, v.0, n, 4);
@@ -433,7 +569,7 @@ pub const INT_CHANNELS: usize = 3;
 pub const FLOAT_CHANNELS: usize = 2;
 
 /// 2⁻²⁰, the scaling of `Dn′` in the `f32` products (module doc).
-const DN_SCALE: f32 = 1.0 / 1_048_576.0;
+pub(crate) const DN_SCALE: f32 = 1.0 / 1_048_576.0;
 
 /// `Dn′ = round(Dn / 2^σ)` (half up) of
 /// `Dn = −κ·d − (X·Vx + Y·Vy) − 4·p0·Q`, exactly, in 32-bit lanes: with
@@ -462,17 +598,34 @@ pub fn rounded_residual(
     dn
 }
 
+/// `row`, its address hidden from the compiler where the pass is compiled
+/// twice (`dispatched_pass`): derived from the engine's carving of its
+/// memory, the address told the compiler where a row stood against 16-byte
+/// boundaries, and it split each 32-byte store of `E` into four and built
+/// `V`'s loads in the tail from shuffles (x86-64: 54.5 → 51.2 instructions
+/// a pixel with this on `E`, the vertical sums and the tail's `V`,
+/// `scripts/profile-stages`). A row's address passes through memory once
+/// a call.
+#[inline(always)]
+pub(crate) fn opaque<T>(row: T) -> T {
+    if cfg!(dispatched_pass) {
+        core::hint::black_box(row)
+    } else {
+        row
+    }
+}
+
 /// `len` elements of `row` from `start` (`None` if it is shorter): a slice
 /// whose length the compiler knows is `len`, so indexing it below `len`
 /// keeps no bounds check.
 #[inline(always)]
-fn cut<T>(row: &[T], start: usize, len: usize) -> Option<&[T]> {
+pub(crate) fn cut<T>(row: &[T], start: usize, len: usize) -> Option<&[T]> {
     row.get(start..)?.get(..len)
 }
 
 /// [`cut`], to be written.
 #[inline(always)]
-fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut [T]> {
+pub(crate) fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut [T]> {
     row.get_mut(start..)?.get_mut(..len)
 }
 
@@ -490,11 +643,42 @@ fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
     ])
 }
 
-/// The five products on columns `cols`: every row cut to exactly the
-/// columns (shifted rows one either side), then [`products_of`].
+/// The five products on columns `cols`: on the M4F `wide_products`'
+/// loops, elsewhere every row cut to exactly the columns (shifted rows one
+/// either side), then [`products_of`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn products_row(
+    input: &ResidualInputs<'_>,
+    xx: &mut [i32],
+    xy: &mut [i32],
+    yy: &mut [i32],
+    xd: &mut [f32],
+    yd: &mut [f32],
+    scratch: ScratchRows<'_>,
+    cols: core::ops::Range<usize>,
+) {
+    let (start, len) = (cols.start, cols.len());
+    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
+        cut_mut(xx, start, len),
+        cut_mut(xy, start, len),
+        cut_mut(yy, start, len),
+        cut_mut(xd, start, len),
+        cut_mut(yd, start, len),
+    ) else {
+        return;
+    };
+    if cfg!(fpu_f32) {
+        crate::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
+    } else {
+        portable_products_row(input, xx, xy, yy, xd, yd, cols);
+    }
+}
+
+/// [`products_row`] on the targets other than the M4F, into product rows
+/// already cut to the columns.
+#[inline(always)]
+pub(crate) fn portable_products_row(
     input: &ResidualInputs<'_>,
     xx: &mut [i32],
     xy: &mut [i32],
@@ -545,16 +729,6 @@ fn products_row(
     ) else {
         return;
     };
-    let start = cols.start;
-    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        cut_mut(xx, start, len),
-        cut_mut(xy, start, len),
-        cut_mut(yy, start, len),
-        cut_mut(xd, start, len),
-        cut_mut(yd, start, len),
-    ) else {
-        return;
-    };
     products_of(
         (kappa, shift),
         vx_l,
@@ -585,7 +759,8 @@ fn products_row(
 /// parameter of its own (see [`binomial_of`]): `V` x left of, at and right
 /// of each column, `V` y above, at and below it, `p0`'s 3×3 neighbourhood
 /// (rows up, mid, down; columns left, at, right), `d`, and the products.
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn products_of(
     (kappa, shift): ([i32; 2], u32),
@@ -672,6 +847,20 @@ fn products_of(
     }
 }
 
+/// Rows a structure row may use for its intermediate values (the engine
+/// lends rows that are free at that point; the M4F's products use them,
+/// `wide_products`).
+pub struct ScratchRows<'a> {
+    /// `X`.
+    pub gx: &'a mut [i16],
+    /// `Y`.
+    pub gy: &'a mut [i16],
+    /// `4·Q`, then the residual's high part.
+    pub high: &'a mut [i32],
+    /// The residual's low part.
+    pub low: &'a mut [i32],
+}
+
 /// The products' rows and the sums' rows of one structure row: the exact
 /// integer channels and the `f32` ones.
 pub struct StructureRows<'a, 'm> {
@@ -683,22 +872,24 @@ pub struct StructureRows<'a, 'm> {
     pub int_sums: [&'a mut [i32]; INT_CHANNELS],
     /// Likewise for the `f32` channels.
     pub float_sums: [&'a mut [f32]; FLOAT_CHANNELS],
+    /// Rows for the intermediate values (FPU boards).
+    pub scratch: ScratchRows<'a>,
 }
 
 /// The five products on `[5, n−5)`, then their horizontal `G` on
 /// `[7, n−7)` into one row of each sum ring.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n: usize) {
     let StructureRows {
         int_products,
         float_products,
         int_sums,
         float_sums,
+        scratch,
     } = rows;
     let [xx, xy, yy] = int_products;
     let [xd, yd] = float_products;
-    products_row(input, xx, xy, yy, xd, yd, span(n, 5));
+    products_row(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
     for (row, sum) in int_products.iter().zip(int_sums) {
         horizontal_binomial(row, sum, n, 7);
     }
@@ -736,6 +927,104 @@ mod tests {
                 running_binomial(&taps, &mut running);
                 assert_eq!(tapped, want, "len {len}");
                 assert_eq!(running, want, "len {len}");
+            }
+        }
+    }
+
+    /// The scalar boards' sliding `f32` binomial sums in the tapped form's
+    /// order: the same bits, on every length.
+    #[test]
+    fn sliding_binomial_is_the_tapped_one() {
+        let mut seed = 0x0bad_5eed_1234_5678u64;
+        for len in 0..40 {
+            let taps: std::vec::Vec<f32> = (0..len + 4)
+                .map(|_| {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    // Products as the engine makes them: multiples of 2⁻²⁰
+                    // up to 2²⁵, with every bit of the mantissa in use.
+                    ((seed >> 11) as i64 - (1 << 52)) as f32 * (1.0 / 1_048_576.0) / 2048.0
+                })
+                .collect();
+            let (mut tapped, mut sliding) = (std::vec![0.0; len], std::vec![0.0; len]);
+            tapped_binomial(&taps, 0, &mut tapped);
+            sliding_binomial(&taps, &mut sliding);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<std::vec::Vec<_>>();
+            assert_eq!(bits(&sliding), bits(&tapped), "len {len}");
+        }
+    }
+
+    /// The scalar boards' rows of `E` are the tapped components, on every
+    /// length and on vertical parts at their bounds.
+    #[test]
+    fn rows_of_e_are_its_components() {
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        for len in 0..40 {
+            for bound in [2, 255] {
+                // Vertical parts as the engine makes them, from five rows
+                // of `d` (their bounds hold `E` within its own).
+                let mut row = || -> std::vec::Vec<i16> {
+                    (0..len + 4)
+                        .map(|_| {
+                            seed ^= seed << 13;
+                            seed ^= seed >> 7;
+                            seed ^= seed << 17;
+                            [
+                                -bound,
+                                bound,
+                                (seed % (2 * bound as u64 + 1)) as i16 - bound,
+                            ][(seed >> 40) as usize % 3]
+                        })
+                        .collect()
+                };
+                let d: [std::vec::Vec<i16>; 5] = core::array::from_fn(|_| row());
+                let [mut v1, mut v2, mut v3, mut v4] =
+                    core::array::from_fn(|_| std::vec![0i16; len + 4]);
+                let [d0, d1, d2, d3, d4] = d.each_ref().map(|r| &r[..]);
+                vertical_parts_of([d0, d1, d2, d3, d4], &mut v1, &mut v2, &mut v3, &mut v4);
+                let taps = |v: &[i16]| -> [std::vec::Vec<i16>; 5] {
+                    core::array::from_fn(|k| v[k..k + len].to_vec())
+                };
+                let [t1, t2, t3, t4] = [&v1, &v2, &v3, &v4].map(|v| taps(v));
+                let (mut want_x, mut want_y) = (std::vec![0; len], std::vec![0; len]);
+                let [a, b, c, d, e] = &t1;
+                let [f, g, h, i, j] = &t2;
+                component_of(
+                    boundary_minus_domain_x,
+                    a,
+                    b,
+                    c,
+                    d,
+                    e,
+                    f,
+                    g,
+                    h,
+                    i,
+                    j,
+                    &mut want_x,
+                );
+                let [a, b, c, d, e] = &t3;
+                let [f, g, h, i, j] = &t4;
+                component_of(
+                    boundary_minus_domain_y,
+                    a,
+                    b,
+                    c,
+                    d,
+                    e,
+                    f,
+                    g,
+                    h,
+                    i,
+                    j,
+                    &mut want_y,
+                );
+                let (mut ex, mut ey) = (std::vec![0; len], std::vec![0; len]);
+                boundary_minus_domain_x_row(&v1, &v2, &mut ex);
+                boundary_minus_domain_y_row(&v3, &v4, &mut ey);
+                assert_eq!(ex, want_x, "len {len}");
+                assert_eq!(ey, want_y, "len {len}");
             }
         }
     }

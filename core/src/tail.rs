@@ -32,6 +32,7 @@
 
 use crate::fpu::sqrt;
 use crate::params::Units;
+use crate::stages::opaque;
 
 /// The rows the tail reads, each from the first output column: the
 /// structure sums `a, b, c` (exact integers) and `p, q` (`f32`), and `V`.
@@ -106,14 +107,37 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
 
 /// The tail of every pixel of `out`. Every row is as long as `m_d` (the
 /// engine's are); should one be shorter, nothing is written.
-#[cfg_attr(feature = "profile", inline(never))]
-#[cfg_attr(not(feature = "profile"), inline(always))]
+#[inline(always)]
 pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
+    // The M4F's magnitudes: a loop each, in assembly (`m4`).
+    #[cfg(fpu_f32)]
+    if let TailOut {
+        m: [m_d, m_c],
+        fields: None,
+    } = out
+    {
+        let TailRows {
+            abc: [a, b, c],
+            pq: [p, q],
+            v: [vx, vy],
+        } = *rows;
+        let units = [k.units.det_floor, k.units.v_d];
+        crate::m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
+        crate::m4::curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
+        return;
+    }
+    tail_row_portable(k, rows, out);
+}
+
+/// [`tail_row`] in portable code on every target.
+#[inline(always)]
+pub(crate) fn tail_row_portable(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
     let TailRows {
         abc: [a, b, c],
         pq: [p, q],
         v: [vx, vy],
     } = *rows;
+    let (vx, vy) = (opaque(vx), opaque(vy));
     let TailOut {
         m: [m_d, m_c],
         fields,
@@ -153,7 +177,8 @@ pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
 /// And every row is cut to one length here, in the function that indexes
 /// it, so no index is bounds-checked on any target (`scripts/embedded-check`
 /// walks the call graph for panics).
-#[inline(always)]
+#[cfg_attr(dispatched_pass, inline(always))]
+#[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn pixels_of<const FIELDS: bool>(
     k: &TailConstants,

@@ -1,8 +1,8 @@
 //! The fixed engine's pass over a textured moving pair, for profilers and
 //! for A/B builds (`scripts/profile-stages`): `engine_pass` is `represent`
-//! with `Fixed` gains (one pass) over the host engine's strips. Built with
-//! the core's `profile` feature, every stage kernel stays out of line, so
-//! callgrind attributes the pass to the stages as the engine runs them.
+//! with `Fixed` gains (one pass) over the host engine's strips, as it
+//! ships: `scripts/profile-stages` attributes each instruction to the
+//! stage inlined at its address (the debug info's inlined subroutines).
 //!
 //! ```text
 //! stage_profile [--size WxH] [--reps N] [--best]  # the pass N times: run under callgrind
@@ -15,8 +15,8 @@
 //! min–max representation of the textured pair at each bench size: two
 //! builds (e.g. before and after an optimisation of the core) must print
 //! the same lines.
-//! Under callgrind, each kernel's inclusive instruction count divided by
-//! `reps · W · H` is the stage's instructions per pixel.
+//! Under callgrind, a stage's instructions divided by `reps · W · H` are
+//! its instructions per pixel.
 
 use std::hint::black_box;
 use std::time::Instant;

@@ -22,12 +22,28 @@ const MISMATCH: i32 = 1;
 const SETUP_FAILED: i32 = 2;
 const IO_FAILED: i32 = 3;
 const INCOMPLETE: i32 = 4;
+#[cfg(feature = "kernel-check")]
+const KERNEL_MISMATCH: i32 = 5;
 
 pub fn main() -> ! {
     semihosting::process::exit(run())
 }
 
 fn run() -> i32 {
+    #[cfg(feature = "kernel-check")]
+    match reynoldsflow_core::kernel_check::run() {
+        Ok(rows) => defmt::info!(
+            "kernel check: {=usize} rows identical to the portable loops'",
+            rows
+        ),
+        Err(kernel) => {
+            defmt::error!(
+                "kernel check: {=str} differs from its portable twin",
+                kernel
+            );
+            return KERNEL_MISMATCH;
+        }
+    }
     defmt::info!(
         "board={=str} size={=usize}x{=usize} cols={=usize} engine_bytes={=usize}",
         BOARD,

@@ -1,6 +1,6 @@
 //! Shared by the benches: the frame sizes, a textured moving pair, and the
 //! core's `represent` ready to time. Stages are profiled inside the engine
-//! itself (core feature `profile`, `scripts/profile-stages`), not mirrored.
+//! as it ships (`scripts/profile-stages`), not mirrored.
 #![allow(dead_code)]
 
 use std::hint::black_box;

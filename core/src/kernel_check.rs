@@ -1,0 +1,311 @@
+//! The firmware's check of the target's assembly row loops (`m4`) against
+//! their portable twins, on rows at the bounds of their inputs and random
+//! ones, every length from 0 to [`LEN`] (both parities of the two-column
+//! loops): `scripts/embedded-check` runs it on the emulated M4 and M7.
+//! Targets without such loops pass trivially. Not part of the stable
+//! surface.
+
+/// The longest row checked.
+pub const LEN: usize = 41;
+
+/// Rows compared, or the first loop whose output differs from its twin's.
+pub fn run() -> Result<usize, &'static str> {
+    #[cfg(fpu_f32)]
+    return m4::run();
+    #[cfg(not(fpu_f32))]
+    Ok(0)
+}
+
+#[cfg(fpu_f32)]
+mod m4 {
+    use super::LEN;
+    use crate::m4;
+    use crate::sink::portable_rgb_tail;
+    use crate::stages::{binomial_of, running_binomial, sliding_binomial, vertical_parts_of};
+    use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
+    use crate::{ByteScale, Config, IntensityScale, Params, wide_products};
+    use fixed::types::U16F16;
+
+    /// xorshift64: values across a range, and its ends one time in four.
+    struct Values(u64);
+
+    impl Values {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            self.0
+        }
+
+        /// In `[−bound, bound]`.
+        fn within(&mut self, bound: i64) -> i64 {
+            let r = self.next();
+            match r % 8 {
+                0 => bound,
+                1 => -bound,
+                _ => (r >> 8) as i64 % (bound + 1) * if r & 16 == 0 { 1 } else { -1 },
+            }
+        }
+    }
+
+    pub(super) fn run() -> Result<usize, &'static str> {
+        let mut values = Values(0x2545_f491_4f6c_dd1d);
+        let mut rows = 0;
+        for len in 0..=LEN {
+            rows += binomials(&mut values, len)?;
+            rows += vertical_parts(&mut values, len)?;
+            rows += products(&mut values, len)?;
+            rows += bytes(&mut values, len)?;
+            rows += magnitudes(&mut values, len)?;
+        }
+        Ok(rows)
+    }
+
+    /// The vertical and horizontal binomials, on sums at the bound of the
+    /// engine's largest (`E` smoothed and the structure products'
+    /// horizontal sums, `< 2²⁴`), and `f32` sums with every mantissa bit in
+    /// use.
+    fn binomials(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let ints: [[i32; LEN + 4]; 5] =
+            core::array::from_fn(|_| core::array::from_fn(|_| values.within((1 << 24) - 1) as i32));
+        let floats: [[f32; LEN + 4]; 5] = core::array::from_fn(|_| {
+            core::array::from_fn(|_| values.within(1 << 45) as f32 * (1.0 / 1_048_576.0))
+        });
+        let [a, b, c, d, e] = ints.each_ref().map(|r| &r[..len]);
+        let (mut want, mut got) = ([0i32; LEN], [0i32; LEN]);
+        binomial_of(a, b, c, d, e, &mut want[..len]);
+        m4::binomial_i32([a, b, c, d, e], &mut got[..len]);
+        if want != got {
+            return Err("binomial_i32");
+        }
+        let [a, b, c, d, e] = floats.each_ref().map(|r| &r[..len]);
+        let (mut want, mut got) = ([0f32; LEN], [0f32; LEN]);
+        binomial_of(a, b, c, d, e, &mut want[..len]);
+        m4::binomial_f32([a, b, c, d, e], &mut got[..len]);
+        if want.map(f32::to_bits) != got.map(f32::to_bits) {
+            return Err("binomial_f32");
+        }
+        // The horizontal ones, on `len + 4` taps.
+        let [taps, ..] = &ints;
+        let (mut want, mut got) = ([0i32; LEN], [0i32; LEN]);
+        if let Some(taps) = taps.get(..len + 4) {
+            running_binomial(taps, &mut want[..len]);
+            m4::running_binomial_i32(taps, &mut got[..len]);
+        }
+        if want != got {
+            return Err("running_binomial_i32");
+        }
+        let [taps, ..] = &floats;
+        let (mut want, mut got) = ([0f32; LEN], [0f32; LEN]);
+        if let Some(taps) = taps.get(..len + 4) {
+            sliding_binomial(taps, &mut want[..len]);
+            m4::sliding_binomial_f32(taps, &mut got[..len]);
+        }
+        if want.map(f32::to_bits) != got.map(f32::to_bits) {
+            return Err("sliding_binomial_f32");
+        }
+        Ok(4)
+    }
+
+    /// `E`'s vertical parts on rows of `d` at ±255 and between, in
+    /// word-aligned rows (the assembly's) and at an odd offset (the
+    /// portable loop's fallback).
+    fn vertical_parts(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        #[repr(align(4))]
+        struct Row([i16; LEN + 1]);
+        let d: [Row; 5] =
+            core::array::from_fn(|_| Row(core::array::from_fn(|_| values.within(255) as i16)));
+        for offset in [0, 1] {
+            let [d0, d1, d2, d3, d4] = d.each_ref().map(|r| &r.0[offset..offset + len]);
+            let mut want = [
+                Row([0; LEN + 1]),
+                Row([0; LEN + 1]),
+                Row([0; LEN + 1]),
+                Row([0; LEN + 1]),
+            ];
+            let mut got = [
+                Row([0; LEN + 1]),
+                Row([0; LEN + 1]),
+                Row([0; LEN + 1]),
+                Row([0; LEN + 1]),
+            ];
+            let [w1, w2, w3, w4] = want.each_mut().map(|r| &mut r.0[offset..offset + len]);
+            vertical_parts_of([d0, d1, d2, d3, d4], w1, w2, w3, w4);
+            let assembled = m4::vertical_parts(
+                [d0, d1, d2, d3, d4],
+                got.each_mut().map(|r| &mut r.0[offset..offset + len]),
+            );
+            if assembled != (offset == 0) {
+                return Err("vertical_parts: alignment");
+            }
+            if assembled && want.each_ref().map(|r| r.0) != got.each_ref().map(|r| r.0) {
+                return Err("vertical_parts");
+            }
+        }
+        Ok(1)
+    }
+
+    /// The gradients on rows of `p0` from 0 to 255, and the residual's
+    /// products at `σ = 8` from gradients, `V` and the residual's parts at
+    /// their bounds (`wide_products`).
+    fn products(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let p0: [[u8; LEN + 2]; 3] =
+            core::array::from_fn(|_| core::array::from_fn(|_| (values.within(127) + 128) as u8));
+        let [up, mid, down] = p0.each_ref().map(|r| &r[..len + 2]);
+        let (mut want, mut got) = ([[0i16; LEN]; 2], [[0i16; LEN]; 2]);
+        let [wx, wy] = want.each_mut().map(|r| &mut r[..len]);
+        wide_products::gradients_of(up, mid, down, wx, wy);
+        let [gx, gy] = got.each_mut().map(|r| &mut r[..len]);
+        m4::gradients(up, mid, down, gx, gy);
+        if want != got {
+            return Err("gradients");
+        }
+        let mut row =
+            |bound: i64| -> [i32; LEN] { core::array::from_fn(|_| values.within(bound) as i32) };
+        let (vx, vy, high, low) = (row(6_854_400), row(6_854_400), row((1 << 28) - 1), row(127));
+        let low = low.map(|l| l.abs());
+        let [gx, gy] = got.each_ref().map(|r| &r[..len]);
+        let (mut want, mut got) = ([[0f32; LEN]; 2], [[0f32; LEN]; 2]);
+        let [xd, yd] = want.each_mut().map(|r| &mut r[..len]);
+        let (vx, vy, high, low) = (&vx[..len], &vy[..len], &high[..len], &low[..len]);
+        wide_products::residual_products_of::<8>(8, gx, gy, vx, vy, high, low, xd, yd);
+        let [xd, yd] = got.each_mut().map(|r| &mut r[..len]);
+        m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
+        if want.map(|r| r.map(f32::to_bits)) != got.map(|r| r.map(f32::to_bits)) {
+            return Err("residual_products_8");
+        }
+        Ok(2)
+    }
+
+    /// The representation's bytes from magnitudes of every size (zero,
+    /// tiny, past the top byte), under fixed gains and per-frame min–max
+    /// maps.
+    fn bytes(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let mut row = || -> [f32; LEN] {
+            core::array::from_fn(|_| {
+                let v = values.next();
+                f32::from_bits((v as u32 >> 9) | 0x3000_0000)
+                    * [0.0, 1.0, 64.0, 1e6][(v >> 40) as usize % 4]
+            })
+        };
+        let (m_d, m_c) = (row(), row());
+        let luma: [u8; LEN] = core::array::from_fn(|_| values.next() as u8);
+        let mut rows = 0;
+        for (scale_d, scale_c) in [
+            (
+                ByteScale::fixed(U16F16::from_num(8)),
+                ByteScale::fixed(U16F16::from_num(32)),
+            ),
+            (
+                ByteScale::min_max(0.001, 3.5),
+                ByteScale::min_max(0.0, 1e-3),
+            ),
+        ] {
+            let (mut want, mut got) = ([[0u8; 3]; LEN], [[0u8; 3]; LEN]);
+            portable_rgb_tail(
+                &m_d[..len],
+                &m_c[..len],
+                &luma[..len],
+                [&scale_d, &scale_c],
+                &mut want[..len],
+            );
+            m4::rgb_row(
+                [&m_d[..len], &m_c[..len]],
+                &luma[..len],
+                [scale_d.parts(), scale_c.parts()],
+                &mut got[..len],
+            );
+            if want != got {
+                return Err("rgb_row");
+            }
+            rows += 1;
+        }
+        Ok(rows)
+    }
+
+    /// Both magnitudes against the portable tail, on structure sums built
+    /// from 25 pixels of gradients and residuals as the engine builds them
+    /// (flat to the largest), `V` at its bound, at the default parameters
+    /// and at `s = 1/1024, λ = 1e-6`.
+    fn magnitudes(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let Ok(scale) = IntensityScale::new(1, 1024) else {
+            return Err("magnitudes: scale");
+        };
+        let small = Params {
+            scale,
+            lambda: fixed::types::U32F32::from_bits(4295),
+        };
+        let mut rows = 0;
+        for params in [Params::DEFAULT, small] {
+            let Ok(config) = Config::new(8, 8, params) else {
+                return Err("magnitudes: configuration");
+            };
+            let k = TailConstants {
+                lambda4: config.lambda4,
+                units: config.units(),
+            };
+            let (mut abc, mut pq, mut v) = ([[0i32; LEN]; 3], [[0f32; LEN]; 2], [[0i32; LEN]; 2]);
+            for i in 0..len {
+                let (gmax, dmax) = [
+                    (1020, 1 << 27),
+                    (30, 1 << 20),
+                    (3, 1 << 27),
+                    (1020, 1000),
+                    (0, 1),
+                ][values.next() as usize % 5];
+                let g = [1i64, 4, 6, 4, 1];
+                let (mut sums, mut products) = ([0i64; 3], [0i64; 2]);
+                for j in 0..25 {
+                    let w = g[j / 5] * g[j % 5];
+                    let (x, y, dn) = (
+                        values.within(gmax),
+                        values.within(gmax),
+                        values.within(dmax),
+                    );
+                    sums[0] += w * x * x;
+                    sums[1] += w * x * y;
+                    sums[2] += w * y * y;
+                    products[0] += w * x * dn;
+                    products[1] += w * y * dn;
+                }
+                for ch in 0..3 {
+                    abc[ch][i] = sums[ch] as i32;
+                }
+                for ch in 0..2 {
+                    pq[ch][i] = (products[ch] as f64 * (1.0 / 1_048_576.0)) as f32;
+                    v[ch][i] = values.within(6_854_400) as i32;
+                }
+            }
+            let tail_rows = TailRows {
+                abc: abc.each_ref().map(|r| &r[..len]),
+                pq: pq.each_ref().map(|r| &r[..len]),
+                v: v.each_ref().map(|r| &r[..len]),
+            };
+            let mut want = [[0f32; LEN]; 2];
+            let out = TailOut {
+                m: want.each_mut().map(|r| &mut r[..len]),
+                fields: None,
+            };
+            tail_row_portable(&k, &tail_rows, out);
+            let mut got = [[0f32; LEN]; 2];
+            let [a, b, c] = tail_rows.abc;
+            let [p, q] = tail_rows.pq;
+            let units = [k.units.det_floor, k.units.v_d];
+            m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, &mut got[0][..len]);
+            m4::curl_free_magnitudes(
+                k.units.v_c,
+                tail_rows.v[0],
+                tail_rows.v[1],
+                &mut got[1][..len],
+            );
+            if want[0].map(f32::to_bits) != got[0].map(f32::to_bits) {
+                return Err("divergence_free_magnitudes");
+            }
+            if want[1].map(f32::to_bits) != got[1].map(f32::to_bits) {
+                return Err("curl_free_magnitudes");
+            }
+            rows += 2;
+        }
+        Ok(rows)
+    }
+}
