@@ -84,9 +84,12 @@ impl ByteScale {
         crate::fpu::byte((m - self.offset) * self.gain + 0.5)
     }
 
-    /// `[offset, gain]`.
-    #[cfg_attr(not(fpu_f32), allow(dead_code))]
-    pub(crate) fn parts(&self) -> [f32; 2] {
+    /// `[offset, gain]`: [`ByteScale::byte`] is `⌊t⌋` of
+    /// `t = (m − offset) · gain + ½` (each operation rounded to `f32`)
+    /// clamped to `[0, 255]`, for a byte step written elsewhere (the host's
+    /// AVX2 one, the M4F's).
+    #[inline(always)]
+    pub fn parts(&self) -> [f32; 2] {
         [self.offset, self.gain]
     }
 }

@@ -4,11 +4,12 @@
 //! to its row kernels, so the AVX2 copy is the whole pass. The core
 //! computes only with integers, so both copies give the same bytes
 //! (tested in `tests/tests/simd.rs`). Per-frame min–max's byte step, which
-//! runs after the pass, is compiled the same two ways (tested in
-//! `fixed_engine`'s RGB-path test).
+//! runs after the pass, is compiled the same two ways, and where the CPU has
+//! AVX2 takes its lanes through intrinsics (`avx2_bytes`; tested in
+//! `fixed_engine`).
 
 use multiversion::multiversion;
-use multiversion::target::target_cfg_f;
+use multiversion::target::{match_target, target_cfg_f};
 use reynoldsflow_core::{
     ByteScale, Error, FramePair, Job, Memory, Plan, Scaling, Sink, TileEngine,
 };
@@ -186,13 +187,18 @@ best_targets! {
         kind.pass(engine, &plan.bind(*frames)?, sink)
     }
 
+    /// Where the CPU has AVX2, the step in its lanes (`avx2_bytes`);
+    /// elsewhere the portable step compiled for the clone's target.
     fn kept_to_bytes_best(
         kept: [&[f32]; 2],
         luma: &[u8],
         rgb: &mut [u8],
         scales: &[ByteScale; 2],
     ) {
-        bytes_from_kept(kept, luma, rgb, scales)
+        match_target! {
+            "x86_64+avx2" => crate::avx2_bytes::kept_to_bytes(kept, luma, rgb, scales),
+            _ => bytes_from_kept(kept, luma, rgb, scales),
+        }
     }
 
     /// What [`Isa::Best`] runs on this CPU, for reports: the clone that

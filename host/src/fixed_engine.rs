@@ -645,6 +645,60 @@ mod tests {
         assert!(rgb == strips.rep);
     }
 
+    /// The min–max byte step of both compilations (AVX2 lanes where the
+    /// CPU has them) gives the bytes of `ByteScale::byte` one pixel at a
+    /// time, on every length around the lanes' steps and on magnitudes of
+    /// every kind: zeros, ties, the range's ends, beyond them, huge, NaN.
+    #[test]
+    fn the_byte_step_is_the_byte_of_each_pixel() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let scales = [
+            ByteScale::min_max(0.25, 3.5),
+            ByteScale::min_max(1e-3, 1e-3),
+            ByteScale::min_max(0.0, 1e-30),
+            ByteScale::fixed(U16F16::lit("8")),
+            ByteScale::fixed(U16F16::MAX),
+            ByteScale::fixed(U16F16::ZERO),
+        ];
+        for len in (0..100).chain([1000, 1031]) {
+            let mut magnitude = |kind: u64| -> f32 {
+                let r = next();
+                match kind % 8 {
+                    0 => 0.0,
+                    1 => 0.25 + (r % 15) as f32 * (3.25 / 255.0) * 0.5,
+                    2 => f32::from_bits((r >> 40) as u32 & 0x7F7F_FFFF),
+                    3 => [f32::MAX, f32::INFINITY, f32::NAN, -1.0][(r % 4) as usize],
+                    4 => 3.5 + (r % 100) as f32,
+                    _ => (r % 1_000_000) as f32 * 4e-6,
+                }
+            };
+            let planes: [Vec<f32>; 2] =
+                std::array::from_fn(|_| (0..len as u64).map(&mut magnitude).collect());
+            let luma: Vec<u8> = (0..len).map(|i| (i * 37 % 256) as u8).collect();
+            for pair in scales.windows(2) {
+                let scales = [pair[0], pair[1]];
+                let want: Vec<u8> = (0..len)
+                    .flat_map(|i| {
+                        let [d, c] = [&planes[0][i], &planes[1][i]];
+                        [scales[0].byte(*d), scales[1].byte(*c), luma[i]]
+                    })
+                    .collect();
+                for isa in [Isa::Best, Isa::Portable] {
+                    let mut rgb = vec![7u8; 3 * len];
+                    let [m_d, m_c] = planes.each_ref().map(|p| &p[..]);
+                    dispatch::kept_to_bytes(isa, [m_d, m_c], &luma, &mut rgb, &scales);
+                    assert!(rgb == want, "{isa:?} {len} {scales:?}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn refuses_empty_tiles_and_mismatched_frames() {
         let (a, b) = (frame(200, 4, 0), frame(200, 4, 1));

@@ -17,6 +17,8 @@
 #![deny(missing_docs)]
 
 pub mod atomic;
+#[cfg(target_arch = "x86_64")]
+mod avx2_bytes;
 pub mod captured;
 pub mod cli;
 pub mod compare;
