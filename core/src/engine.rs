@@ -12,6 +12,7 @@
 //! Because each stage depends only on its inputs, not on where the window
 //! starts, every tiling yields the same bytes as one whole-frame window.
 
+use crate::job::Kernels;
 use crate::ring::{RowRing, take_rows};
 use crate::schedule::{
     D_DEPTH, E_DEPTH, E_LAG, E_RADIUS, E_START, HALO, OUTPUT_LAG, OUTPUT_START, P0_DEPTH,
@@ -19,7 +20,7 @@ use crate::schedule::{
     V_START,
 };
 use crate::stages::{
-    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
+    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows, Sums,
     boundary_minus_domain, smooth, structure_row, vertical_binomial,
 };
 use crate::tail::{TailConstants, TailOut, TailRows, tail_row};
@@ -332,13 +333,13 @@ impl<'m> SliceEngine<'m> {
 /// The engine's rows, carved from its memory for one window width.
 struct Rows<'m> {
     int_products: [&'m mut [i32]; INT_CHANNELS],
-    int_sums: [RowRing<'m, i32, SUM_DEPTH>; INT_CHANNELS],
+    int_sums: SumRing<'m, i32, INT_CHANNELS>,
     e: [RowRing<'m, i32, E_DEPTH>; 2],
     v: [RowRing<'m, i32, V_DEPTH>; 2],
     /// `E` before its horizontal smoothing (the ring keeps it smoothed).
     e_scratch: [&'m mut [i32]; 2],
     float_products: [&'m mut [f32]; FLOAT_CHANNELS],
-    float_sums: [RowRing<'m, f32, SUM_DEPTH>; FLOAT_CHANNELS],
+    float_sums: SumRing<'m, f32, FLOAT_CHANNELS>,
     /// The output's `[|v_d|, |v_c|]`.
     magnitudes: [&'m mut [f32]; MAGNITUDE_ROWS],
     /// The output's `[v_c x, v_c y, v_d x, v_d y]`.
@@ -346,25 +347,134 @@ struct Rows<'m> {
     d: RowRing<'m, i16, D_DEPTH>,
     vert_d: [&'m mut [i16]; 4],
     p0: RowRing<'m, u8, P0_DEPTH>,
+    /// The AVX2 kernels, with the sums' rings in blocks, or `None`.
+    #[cfg(target_arch = "x86_64")]
+    avx2: Option<crate::Avx2>,
+}
+
+/// The ring of one kind of structure sums (`K` channels): a ring per
+/// channel, or with the AVX2 kernels one ring whose rows hold all `K`
+/// channels in blocks (`avx2`; the same memory).
+enum SumRing<'m, T, const K: usize> {
+    Planar([RowRing<'m, T, SUM_DEPTH>; K]),
+    #[cfg(target_arch = "x86_64")]
+    Blocked(RowRing<'m, T, SUM_DEPTH>),
+}
+
+impl<'m, T, const K: usize> SumRing<'m, T, K> {
+    /// The ring(s) of rows of `cols` values per channel.
+    #[inline(always)]
+    fn carve(memory: &mut &'m mut [T], cols: usize, blocked: bool) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if blocked {
+            return Self::Blocked(RowRing::carve(memory, K * cols));
+        }
+        let _ = blocked;
+        Self::Planar(core::array::from_fn(|_| RowRing::carve(memory, cols)))
+    }
+
+    /// Row `t` of each channel's ring, or of the blocked ring.
+    #[inline(always)]
+    fn row_mut(&mut self, t: usize) -> SumRow<'_, T, K> {
+        match self {
+            Self::Planar(rings) => SumRow::Planar(rings.each_mut().map(|ring| ring.row_mut(t))),
+            #[cfg(target_arch = "x86_64")]
+            Self::Blocked(ring) => SumRow::Blocked(ring.row_mut(t)),
+        }
+    }
+}
+
+/// What the tail of output row `o` reads: the vertical sums (after
+/// [`Rows::structure_sums`]) and `V`, or with the AVX2 kernels the sums'
+/// blocked rings and `V` (the rows it reads, not the ones the tail writes).
+#[inline(always)]
+fn tail_input<'a>(
+    sums: (
+        &'a SumRing<'_, i32, INT_CHANNELS>,
+        &'a SumRing<'_, f32, FLOAT_CHANNELS>,
+    ),
+    products: (
+        &'a [&mut [i32]; INT_CHANNELS],
+        &'a [&mut [f32]; FLOAT_CHANNELS],
+    ),
+    v: [&'a [i32]; 2],
+    #[cfg(target_arch = "x86_64")] avx2: Option<crate::Avx2>,
+    o: usize,
+) -> TailInput<'a> {
+    #[cfg(target_arch = "x86_64")]
+    if let (Some(avx2), SumRing::Blocked(ints), SumRing::Blocked(floats)) = (avx2, sums.0, sums.1) {
+        let rows = crate::avx2::BlockedRows {
+            ints: ints.rows(o - SUM_RADIUS),
+            floats: floats.rows(o - SUM_RADIUS),
+            v,
+        };
+        return TailInput::Blocked(avx2, rows);
+    }
+    let _ = (sums, o);
+    TailInput::Planar(TailRows {
+        abc: products.0.each_ref().map(|row| from_first_output(row)),
+        pq: products.1.each_ref().map(|row| from_first_output(row)),
+        v: v.map(from_first_output),
+    })
+}
+
+/// What an output row's tail reads ([`tail_input`]).
+enum TailInput<'a> {
+    Planar(TailRows<'a>),
+    #[cfg(target_arch = "x86_64")]
+    Blocked(crate::Avx2, crate::avx2::BlockedRows<'a>),
+}
+
+impl TailInput<'_> {
+    /// The tail of the row into `out`.
+    #[inline(always)]
+    fn run(&self, constants: &TailConstants, out: TailOut<'_>) {
+        match self {
+            Self::Planar(rows) => tail_row(constants, rows, out),
+            #[cfg(target_arch = "x86_64")]
+            Self::Blocked(avx2, rows) => crate::avx2::tail_row(*avx2, constants, rows, out),
+        }
+    }
+}
+
+/// One row of a [`SumRing`].
+enum SumRow<'a, T, const K: usize> {
+    Planar([&'a mut [T]; K]),
+    #[cfg(target_arch = "x86_64")]
+    Blocked(&'a mut [T]),
 }
 
 impl<'m> Rows<'m> {
     /// The vertical G of the five sums centred on window row `o`, into the
-    /// product rows (free by then).
+    /// product rows (free by then), from rings a channel each.
     #[inline(always)]
     fn structure_sums(&mut self, o: usize, n: usize) {
-        for (ring, out) in self.int_sums.iter().zip(self.int_products.iter_mut()) {
-            vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
-        }
-        for (ring, out) in self.float_sums.iter().zip(self.float_products.iter_mut()) {
-            vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
+        match (&self.int_sums, &self.float_sums) {
+            (SumRing::Planar(ints), SumRing::Planar(floats)) => {
+                for (ring, out) in ints.iter().zip(self.int_products.iter_mut()) {
+                    vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
+                }
+                for (ring, out) in floats.iter().zip(self.float_products.iter_mut()) {
+                    vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
+                }
+            }
+            // Blocked: the AVX2 tail sums them itself.
+            #[cfg(target_arch = "x86_64")]
+            _ => {}
         }
     }
 
     /// Rows of `cols` elements, in the order [`WORD_ROWS`] and its
     /// neighbours count them.
     #[inline(always)]
-    fn carve(planes: memory::Planes<'m>, cols: usize) -> Self {
+    fn carve(planes: memory::Planes<'m>, cols: usize, kernels: Kernels) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        let blocked = kernels.avx2.is_some();
+        #[cfg(not(target_arch = "x86_64"))]
+        let blocked = {
+            let _ = kernels;
+            false
+        };
         let memory::Planes {
             mut words,
             mut floats,
@@ -376,17 +486,19 @@ impl<'m> Rows<'m> {
         let halves = &mut halves;
         Self {
             int_products: take_rows(words, cols),
-            int_sums: core::array::from_fn(|_| RowRing::carve(words, cols)),
+            int_sums: SumRing::carve(words, cols, blocked),
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
             e_scratch: take_rows(words, cols),
             float_products: take_rows(floats, cols),
-            float_sums: core::array::from_fn(|_| RowRing::carve(floats, cols)),
+            float_sums: SumRing::carve(floats, cols, blocked),
             magnitudes: take_rows(floats, cols),
             fields: take_rows(floats, cols),
             d: RowRing::carve(halves, cols),
             vert_d: take_rows(halves, cols),
             p0: RowRing::carve(&mut bytes, cols),
+            #[cfg(target_arch = "x86_64")]
+            avx2: kernels.avx2,
         }
     }
 }
@@ -432,7 +544,7 @@ impl<M: Memory> TileEngine<M> {
             });
             // The rows are carved once per window, not once per row: with
             // memory of run-time width (`Slices`) carving is real work.
-            let mut pass = self.pass();
+            let mut pass = self.pass(job.kernels());
             for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
                 let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
                 pass.push(config, prev, next, sink);
@@ -465,16 +577,16 @@ impl<M: Memory> TileEngine<M> {
         next: &[u8],
         sink: &mut S,
     ) {
-        self.pass().push(config, prev, next, sink);
+        self.pass(Kernels::default()).push(config, prev, next, sink);
     }
 
     /// The current window with the rows it computes in.
     #[inline(always)]
-    fn pass(&mut self) -> Pass<'_> {
+    fn pass(&mut self, kernels: Kernels) -> Pass<'_> {
         let cols = self.memory.cols();
         Pass {
             window: &mut self.window,
-            rows: Rows::carve(self.memory.planes(), cols),
+            rows: Rows::carve(self.memory.planes(), cols, kernels),
         }
     }
 }
@@ -528,11 +640,20 @@ impl Pass<'_> {
                 kappa: config.kappa_split(),
                 shift: config.dn_shift,
             };
+            let sums = match (rows.int_sums.row_mut(j), rows.float_sums.row_mut(j)) {
+                (SumRow::Planar(ints), SumRow::Planar(floats)) => Sums::Planar(ints, floats),
+                #[cfg(target_arch = "x86_64")]
+                (SumRow::Blocked(ints), SumRow::Blocked(floats)) => match rows.avx2 {
+                    Some(avx2) => Sums::Blocked(avx2, ints, floats),
+                    None => return, // never: blocked rings come with the kernels
+                },
+                #[cfg(target_arch = "x86_64")]
+                _ => return, // never: both rings are carved alike
+            };
             let structure = StructureRows {
                 int_products: &mut rows.int_products,
                 float_products: &mut rows.float_products,
-                int_sums: rows.int_sums.each_mut().map(|ring| ring.row_mut(j)),
-                float_sums: rows.float_sums.each_mut().map(|ring| ring.row_mut(j)),
+                sums,
                 // Free once `E` of this push is in its ring.
                 scratch: {
                     let [gx, gy, ..] = &mut rows.vert_d;
@@ -560,17 +681,14 @@ impl Pass<'_> {
         rows.structure_sums(o, n);
         let reads_fields = sink.reads_fields();
         let width = n.saturating_sub(2 * HALO);
-        let tail_rows = TailRows {
-            abc: rows
-                .int_products
-                .each_ref()
-                .map(|row| from_first_output(row)),
-            pq: rows
-                .float_products
-                .each_ref()
-                .map(|row| from_first_output(row)),
-            v: [rows.v[0].row(o), rows.v[1].row(o)].map(from_first_output),
-        };
+        let tail_rows = tail_input(
+            (&rows.int_sums, &rows.float_sums),
+            (&rows.int_products, &rows.float_products),
+            [rows.v[0].row(o), rows.v[1].row(o)],
+            #[cfg(target_arch = "x86_64")]
+            rows.avx2,
+            o,
+        );
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_mut().map(|row| first_mut(row, width));
         let out = TailOut {
             m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
@@ -592,12 +710,12 @@ impl Pass<'_> {
         if !reads_fields {
             let (y, x) = at();
             if let Some(m) = sink.magnitude_rows(y, x, width) {
-                tail_row(&constants, &tail_rows, TailOut { m, fields: None });
+                tail_rows.run(&constants, TailOut { m, fields: None });
                 sink.kept_row(y, x, first(from_first_output(rows.p0.row(o)), width));
                 return;
             }
         }
-        tail_row(&constants, &tail_rows, out);
+        tail_rows.run(&constants, out);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
         let pixels = Pixels {

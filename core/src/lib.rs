@@ -62,13 +62,19 @@
 // instructions for 32 bytes against 57); in `m4.rs`, the M4F's and M7's
 // hottest row loops in `asm!` (with `wide_products`, 443 → 306
 // instructions a pixel at 320×240), held equal to their portable twins by
-// `kernel_check` on the emulated boards.
+// `kernel_check` on the emulated boards; in `avx2.rs`, the structure sums
+// and the tail of x86-64 hosts that find AVX2 at run time in intrinsics
+// (the `#[target_feature]` calls, which its token makes sound, and loads
+// and stores of eight lanes within rows checked once a row), held equal to
+// the portable pass by `tests/tests/simd.rs`.
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 
 #[cfg(test)]
 extern crate std;
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 mod engine;
 mod error;
 mod fpu;
@@ -98,6 +104,8 @@ mod wide_products;
 /// registers do (`stages`, `scale`).
 const VECTOR_ROWS: bool = cfg!(vector_rows);
 
+#[cfg(target_arch = "x86_64")]
+pub use avx2::Avx2;
 pub use engine::{
     Arrays, Engine, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine, working_bytes,
 };

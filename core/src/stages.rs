@@ -868,12 +868,24 @@ pub struct StructureRows<'a, 'm> {
     pub int_products: &'a mut [&'m mut [i32]; INT_CHANNELS],
     /// `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on `[5, n−5)`.
     pub float_products: &'a mut [&'m mut [f32]; FLOAT_CHANNELS],
-    /// Their horizontal `G` on `[7, n−7)`, one row of each sum ring.
-    pub int_sums: [&'a mut [i32]; INT_CHANNELS],
-    /// Likewise for the `f32` channels.
-    pub float_sums: [&'a mut [f32]; FLOAT_CHANNELS],
+    /// Where their horizontal `G` on `[7, n−7)` goes.
+    pub sums: Sums<'a>,
     /// Rows for the intermediate values (FPU boards).
     pub scratch: ScratchRows<'a>,
+}
+
+/// One row of each structure sums ring: a row per channel (the integer
+/// channels', then the `f32` ones'), or with the AVX2 kernels one row of
+/// blocks of each kind (`avx2`).
+pub enum Sums<'a> {
+    /// A row per channel.
+    Planar(
+        [&'a mut [i32]; INT_CHANNELS],
+        [&'a mut [f32]; FLOAT_CHANNELS],
+    ),
+    /// Blocks of all integer channels, of both `f32` channels.
+    #[cfg(target_arch = "x86_64")]
+    Blocked(crate::Avx2, &'a mut [i32], &'a mut [f32]),
 }
 
 /// The five products on `[5, n−5)`, then their horizontal `G` on
@@ -883,18 +895,27 @@ pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n:
     let StructureRows {
         int_products,
         float_products,
-        int_sums,
-        float_sums,
+        sums,
         scratch,
     } = rows;
     let [xx, xy, yy] = int_products;
     let [xd, yd] = float_products;
     products_row(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
-    for (row, sum) in int_products.iter().zip(int_sums) {
-        horizontal_binomial(row, sum, n, 7);
-    }
-    for (row, sum) in float_products.iter().zip(float_sums) {
-        horizontal_binomial(row, sum, n, 7);
+    match sums {
+        Sums::Planar(int_sums, float_sums) => {
+            for (row, sum) in int_products.iter().zip(int_sums) {
+                horizontal_binomial(row, sum, n, 7);
+            }
+            for (row, sum) in float_products.iter().zip(float_sums) {
+                horizontal_binomial(row, sum, n, 7);
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        Sums::Blocked(avx2, int_sums, float_sums) => {
+            let ints = int_products.each_ref().map(|row| &row[..]);
+            let floats = float_products.each_ref().map(|row| &row[..]);
+            crate::avx2::horizontal_sums(avx2, ints, floats, int_sums, float_sums, n);
+        }
     }
 }
 

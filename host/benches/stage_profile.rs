@@ -101,6 +101,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     let (mut w, mut h, mut reps, mut timing) = (640usize, 480usize, 1usize, false);
+    let mut strip = None;
     let mut isa = Isa::Portable;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -113,13 +114,14 @@ fn main() {
             "--reps" => reps = args.next().and_then(|r| r.parse().ok()).expect("--reps N"),
             "--time" => timing = true,
             "--best" => isa = Isa::Best,
+            "--strip" => strip = args.next().and_then(|r| r.parse().ok()),
             "--digest" => return digests(),
             _ => {} // cargo bench's own flags
         }
     }
     let (prev, next) = moving_pair(w, h);
     let config = Config::new(w, h, Params::DEFAULT).unwrap();
-    let plan = Plan::strips(config, strip_width(w)).unwrap();
+    let plan = Plan::strips(config, strip.unwrap_or(strip_width(w))).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, &prev, &next).unwrap())
         .unwrap();
@@ -135,7 +137,7 @@ fn main() {
         return;
     }
     let px = (w * h) as f64;
-    let times: Vec<f64> = (0..15)
+    let times: Vec<f64> = (0..41)
         .map(|_| {
             let t = Instant::now();
             engine_pass(isa, &mut engine, &job, &mut rgb);

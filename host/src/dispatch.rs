@@ -184,7 +184,13 @@ best_targets! {
         frames: &FramePair<'_>,
         sink: &mut S,
     ) -> Result<(), Error> {
-        kind.pass(engine, &plan.bind(*frames)?, sink)
+        let job = plan.bind(*frames)?;
+        // Compiled for AVX2 and FMA, this clone can make the core's token
+        // for its AVX2 kernels (`Avx2::new` needs those features).
+        match_target! {
+            "x86_64+avx2+fma" => kind.pass(engine, &job.with_avx2(reynoldsflow_core::Avx2::new()), sink),
+            _ => kind.pass(engine, &job, sink),
+        }
     }
 
     /// Where the CPU has AVX2, the step in its lanes (`avx2_bytes`);
