@@ -3,15 +3,18 @@
 //! pass for them and hands the job an [`Avx2`], which only code compiled
 //! with those features can make without `unsafe`.
 //!
-//! With it the engine keeps the sums' rings in blocks ([`BLOCK`] output
-//! columns, the channels of a block side by side) instead of a row per
-//! channel, and one loop does an output row's work: the vertical `G` of the
-//! five sums, the solve, both magnitudes (and the fields, for sinks that
-//! read them), eight pixels a step. Rows a channel each would take 25 row
-//! pointers into that loop, more than x86-64 has registers; in blocks the
-//! ten rows of the window are ten pointers, and the sums never go back to
-//! memory. The compiler's own vectorisation cannot be led there: it
-//! vectorises an eight-column block loop across blocks, by gathers.
+//! With it the engine keeps each sums ring (the three integer channels',
+//! the two `f32` ones') in blocks of [`BLOCK`] output columns: a block holds
+//! those columns of every channel of all five rows of the ring, row slot by
+//! row slot. One loop then does an output row's work: the vertical `G` of
+//! the five sums, the solve, both magnitudes and their extremes (or the
+//! fields, for sinks that read them), eight pixels a step, reading each
+//! ring through one pointer at constant offsets (the loop is compiled once
+//! per slot of the window's first row). Rows a channel each took 25 row
+//! pointers into that loop, more than x86-64 has registers, and the sums
+//! went to memory and back between the vertical `G` and the tail. The
+//! compiler's own vectorisation cannot be led there: it vectorises an
+//! eight-column block loop across blocks, by gathers.
 //!
 //! Every operation is the portable one, in the same order, so the bytes
 //! are the same (`tests/tests/simd.rs`): exact integer sums, and the `f32`
@@ -22,19 +25,20 @@
 //! the same sum once, as the two steps do.
 //!
 //! `unsafe` here: the calls of the `#[target_feature]` functions, which the
-//! token's existence makes sound, and the loads and stores, each of one
-//! whole array of eight lanes (`lanes`, `store`).
+//! token's existence makes sound, and the loads and stores of eight lanes,
+//! each within a row whose length is checked once a row.
 #![allow(unsafe_code)]
 
 use core::arch::x86_64::{
-    __m256, __m256i, _mm256_add_epi32, _mm256_add_ps, _mm256_cvtepi32_ps, _mm256_div_ps,
-    _mm256_fmadd_ps, _mm256_loadu_ps, _mm256_loadu_si256, _mm256_max_ps, _mm256_mul_ps,
-    _mm256_set1_epi32, _mm256_set1_ps, _mm256_slli_epi32, _mm256_sqrt_ps, _mm256_storeu_ps,
-    _mm256_storeu_si256, _mm256_sub_ps,
+    __m256, __m256i, _mm256_add_epi32, _mm256_add_ps, _mm256_castps_si256, _mm256_cvtepi32_ps,
+    _mm256_div_ps, _mm256_fmadd_ps, _mm256_loadu_ps, _mm256_loadu_si256, _mm256_max_epu32,
+    _mm256_max_ps, _mm256_min_epu32, _mm256_mul_ps, _mm256_set1_epi32, _mm256_set1_ps,
+    _mm256_slli_epi32, _mm256_sqrt_ps, _mm256_storeu_ps, _mm256_storeu_si256, _mm256_sub_ps,
 };
 
-use crate::schedule::HALO;
+use crate::schedule::{HALO, SUM_DEPTH};
 use crate::tail::{TailConstants, TailOut};
+use crate::{Extremes, ExtremesSink};
 
 /// Proof that the CPU runs AVX2 and FMA. Give it to a job
 /// ([`Job::with_avx2`](crate::Job::with_avx2)) and the engine runs the
@@ -56,20 +60,28 @@ impl Avx2 {
     }
 }
 
-/// Output columns a block of the sums' rings: one AVX2 vector of each
-/// channel.
-pub(crate) const BLOCK: usize = 8;
+/// Output columns a block: one AVX2 vector of each channel of each row.
+const BLOCK: usize = 8;
 
-/// Integer channels a block (`X², XY, Y²`), `f32` channels (`X·Dn′`,
-/// `Y·Dn′`), and the elements of a block of each.
+/// Integer channels (`X², XY, Y²`) and `f32` channels (`X·Dn′`, `Y·Dn′`).
 const INTS: usize = 3;
 const FLOATS: usize = 2;
-const INT_BLOCK: usize = INTS * BLOCK;
-const FLOAT_BLOCK: usize = FLOATS * BLOCK;
+
+/// Values a block of a ring of `K` channels: output column `8b + j` of
+/// channel `ch` of the row in slot `s` (window row `t` is in slot
+/// `t mod 5`) at `b · ring_block(K) + (s · K + ch) · 8 + j`. A ring of rows
+/// `cols` long per channel holds `⌈w / 8⌉` blocks (`8 ⌈w / 8⌉ < w + 14`).
+const fn ring_block(k: usize) -> usize {
+    SUM_DEPTH * k * BLOCK
+}
+
+/// Where lane 0 of channel `ch` of slot `slot` of block `b` lies.
+const fn at(k: usize, b: usize, slot: usize, ch: usize) -> usize {
+    b * ring_block(k) + (slot * k + ch) * BLOCK
+}
 
 /// Blocks of a row of `w` output columns.
-#[inline(always)]
-pub(crate) const fn blocks(w: usize) -> usize {
+const fn blocks(w: usize) -> usize {
     w.div_ceil(BLOCK)
 }
 
@@ -137,39 +149,35 @@ fn binomial_f(a: __m256, b: __m256, c: __m256, d: __m256, e: __m256) -> __m256 {
 }
 
 /// The horizontal `G` of the five products of a row (window columns,
-/// valid on `[5, n − 5)`) into one row of each sums ring, in blocks: the
-/// sums of output column `k` (window column `HALO + k`) at
-/// `(k / 8)·24 + channel·8 + k mod 8` of `int_sums` and
-/// `(k / 8)·16 + channel·8 + k mod 8` of `float_sums`. The last block's
-/// lanes past the row's last output column get sums of columns past the
-/// window (bounded like any sum: the rows past it hold earlier products or
-/// zeros), unless those would lie past the rows' ends: then those lanes
-/// keep what they held.
+/// valid on `[5, n − 5)`) into slot `slot` of both sums rings. The last
+/// block's lanes past the row's last output column get sums of columns
+/// past the window (bounded like any sum: the rows there hold earlier
+/// products or zeros), unless those would lie past the rows' ends: then
+/// those lanes keep what they held.
 #[inline(always)]
 pub(crate) fn horizontal_sums(
     _: Avx2,
     ints: [&[i32]; INTS],
     floats: [&[f32]; FLOATS],
-    int_sums: &mut [i32],
-    float_sums: &mut [f32],
+    rings: (&mut [i32], &mut [f32], usize),
     n: usize,
 ) {
     // SAFETY: the token proves AVX2 and FMA.
-    unsafe { horizontal_sums_avx2(ints, floats, int_sums, float_sums, n) }
+    unsafe { horizontal_sums_avx2(ints, floats, rings, n) }
 }
 
 #[target_feature(enable = "avx2,fma")]
 fn horizontal_sums_avx2(
     ints: [&[i32]; INTS],
     floats: [&[f32]; FLOATS],
-    int_sums: &mut [i32],
-    float_sums: &mut [f32],
+    (int_ring, float_ring, slot): (&mut [i32], &mut [f32], usize),
     n: usize,
 ) {
     let nb = blocks(n.saturating_sub(2 * HALO));
-    let (Some(int_sums), Some(float_sums)) = (
-        int_sums.get_mut(..nb * INT_BLOCK),
-        float_sums.get_mut(..nb * FLOAT_BLOCK),
+    let slot = slot % SUM_DEPTH;
+    let (Some(int_ring), Some(float_ring)) = (
+        int_ring.get_mut(..nb * ring_block(INTS)),
+        float_ring.get_mut(..nb * ring_block(FLOATS)),
     ) else {
         return;
     };
@@ -186,13 +194,13 @@ fn horizontal_sums_avx2(
         Some(len) if len >= reach => ((len - reach) / BLOCK + 1).min(nb),
         _ => 0,
     };
-    let (int_out, float_out) = (int_sums.as_mut_ptr(), float_sums.as_mut_ptr());
+    let (int_out, float_out) = (int_ring.as_mut_ptr(), float_ring.as_mut_ptr());
     for b in 0..whole {
         let first = HALO - 2 + BLOCK * b;
         for (ch, row) in ints.iter().enumerate() {
             let p = row.as_ptr();
             // SAFETY: `first + 12 ≤ len` (`whole`), and block `b < nb`
-            // lies in `int_sums`.
+            // lies in the ring.
             unsafe {
                 let sum = binomial(
                     load(p.add(first)),
@@ -201,7 +209,7 @@ fn horizontal_sums_avx2(
                     load(p.add(first + 3)),
                     load(p.add(first + 4)),
                 );
-                store(int_out.add(b * INT_BLOCK + ch * BLOCK), sum);
+                store(int_out.add(at(INTS, b, slot, ch)), sum);
             }
         }
         for (ch, row) in floats.iter().enumerate() {
@@ -215,31 +223,33 @@ fn horizontal_sums_avx2(
                     load_f(p.add(first + 3)),
                     load_f(p.add(first + 4)),
                 );
-                store_f(float_out.add(b * FLOAT_BLOCK + ch * BLOCK), sum);
+                store_f(float_out.add(at(FLOATS, b, slot, ch)), sum);
             }
         }
     }
     // A last block whose taps would pass a row's end: its lanes one at a
     // time, those whose taps lie in the row.
-    let (int_blocks, float_blocks) = (
-        int_sums.as_chunks_mut::<INT_BLOCK>().0,
-        float_sums.as_chunks_mut::<FLOAT_BLOCK>().0,
-    );
     for b in whole..nb {
         let first = HALO - 2 + BLOCK * b;
-        let (Some(int_out), Some(float_out)) = (int_blocks.get_mut(b), float_blocks.get_mut(b))
-        else {
-            return;
-        };
-        for (row, out) in ints.iter().zip(int_out.as_chunks_mut::<BLOCK>().0) {
-            scalar_taps(row, first, out, |a, b, c, d, e| {
-                (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
-            });
+        for (ch, row) in ints.iter().enumerate() {
+            let out = int_ring
+                .get_mut(at(INTS, b, slot, ch)..)
+                .and_then(|r| r.first_chunk_mut());
+            if let Some(out) = out {
+                scalar_taps(row, first, out, |a, b, c, d, e| {
+                    (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
+                });
+            }
         }
-        for (row, out) in floats.iter().zip(float_out.as_chunks_mut::<BLOCK>().0) {
-            scalar_taps(row, first, out, |a, b, c, d, e| {
-                ((a + e) + (b + d) * 4.0) + c * 6.0
-            });
+        for (ch, row) in floats.iter().enumerate() {
+            let out = float_ring
+                .get_mut(at(FLOATS, b, slot, ch)..)
+                .and_then(|r| r.first_chunk_mut());
+            if let Some(out) = out {
+                scalar_taps(row, first, out, |a, b, c, d, e| {
+                    ((a + e) + (b + d) * 4.0) + c * 6.0
+                });
+            }
         }
     }
 }
@@ -259,13 +269,15 @@ fn scalar_taps<T: Copy>(
     }
 }
 
-/// The rows one output row's tail reads in blocks: the five rows of each
-/// sums ring centred on it, and `V` (window columns).
+/// What one output row's tail reads: both sums rings, the slot of the
+/// first of the five rows centred on it, and `V` (window columns).
 pub(crate) struct BlockedRows<'a> {
-    /// The integer sums' ring rows, oldest first.
-    pub ints: [&'a [i32]; 5],
-    /// The `f32` sums' ring rows.
-    pub floats: [&'a [f32]; 5],
+    /// The integer sums' ring.
+    pub ints: &'a [i32],
+    /// The `f32` sums' ring.
+    pub floats: &'a [f32],
+    /// The slot of the row two above the output row.
+    pub first_slot: usize,
     /// `V` (x, y) of the row.
     pub v: [&'a [i32]; 2],
 }
@@ -275,12 +287,36 @@ pub(crate) struct BlockedRows<'a> {
 /// columns of a window of `n` (the outputs' length; shorter rows write
 /// nothing).
 #[inline(always)]
-pub(crate) fn tail_row(_: Avx2, k: &TailConstants, rows: &BlockedRows<'_>, out: TailOut<'_>) {
-    // SAFETY: the token proves AVX2 and FMA.
+pub(crate) fn tail_row(
+    _: Avx2,
+    k: &TailConstants,
+    rows: &BlockedRows<'_>,
+    out: TailOut<'_>,
+) -> ExtremesSink {
+    let TailOut { m, fields } = out;
+    match fields {
+        None => by_slot::<false>(k, rows, m, [&mut [], &mut [], &mut [], &mut []]),
+        Some(fields) => by_slot::<true>(k, rows, m, fields),
+    }
+}
+
+/// [`tail_row_avx2`] compiled for the slot of the output row's first sums
+/// row, so that every load is at a constant offset from one pointer a ring.
+#[inline(always)]
+fn by_slot<const FIELDS: bool>(
+    k: &TailConstants,
+    rows: &BlockedRows<'_>,
+    m: [&mut [f32]; 2],
+    fields: [&mut [f32]; 4],
+) -> ExtremesSink {
+    // SAFETY: the token (the caller's) proves AVX2 and FMA.
     unsafe {
-        match out.fields {
-            None => tail_row_avx2::<false>(k, rows, out.m, [&mut [], &mut [], &mut [], &mut []]),
-            Some(fields) => tail_row_avx2::<true>(k, rows, out.m, fields),
+        match rows.first_slot % SUM_DEPTH {
+            0 => tail_row_avx2::<FIELDS, 0>(k, rows, m, fields),
+            1 => tail_row_avx2::<FIELDS, 1>(k, rows, m, fields),
+            2 => tail_row_avx2::<FIELDS, 2>(k, rows, m, fields),
+            3 => tail_row_avx2::<FIELDS, 3>(k, rows, m, fields),
+            _ => tail_row_avx2::<FIELDS, 4>(k, rows, m, fields),
         }
     }
 }
@@ -294,25 +330,27 @@ struct Constants {
 }
 
 #[target_feature(enable = "avx2,fma")]
-fn tail_row_avx2<const FIELDS: bool>(
+fn tail_row_avx2<const FIELDS: bool, const FIRST: usize>(
     k: &TailConstants,
     rows: &BlockedRows<'_>,
     [m_d, m_c]: [&mut [f32]; 2],
     fields: [&mut [f32]; 4],
-) {
+) -> ExtremesSink {
     let w = m_d.len();
     let (nb, whole) = (blocks(w), w / BLOCK);
-    let BlockedRows { ints, floats, v } = rows;
+    let BlockedRows {
+        ints, floats, v, ..
+    } = rows;
     let [vx, vy] = v.map(|row| row.get(HALO..HALO + w).unwrap_or(&[]));
     let fields_len = if FIELDS { w } else { 0 };
-    if ints.iter().any(|row| row.len() < nb * INT_BLOCK)
-        || floats.iter().any(|row| row.len() < nb * FLOAT_BLOCK)
+    if ints.len() < nb * ring_block(INTS)
+        || floats.len() < nb * ring_block(FLOATS)
         || vx.len() < w
         || vy.len() < w
         || m_c.len() < w
         || fields.iter().any(|row| row.len() < fields_len)
     {
-        return;
+        return ExtremesSink::default();
     }
     let c = Constants {
         lambda4: _mm256_set1_epi32(k.lambda4),
@@ -320,22 +358,7 @@ fn tail_row_avx2<const FIELDS: bool>(
         v_d: _mm256_set1_ps(k.units.v_d),
         v_c: _mm256_set1_ps(k.units.v_c),
     };
-    let [i0, i1, i2, i3, i4] = *ints;
-    let ints = [
-        i0.as_ptr(),
-        i1.as_ptr(),
-        i2.as_ptr(),
-        i3.as_ptr(),
-        i4.as_ptr(),
-    ];
-    let [f0, f1, f2, f3, f4] = *floats;
-    let floats = [
-        f0.as_ptr(),
-        f1.as_ptr(),
-        f2.as_ptr(),
-        f3.as_ptr(),
-        f4.as_ptr(),
-    ];
+    let (ints, floats) = (ints.as_ptr(), floats.as_ptr());
     let [v_c_x, v_c_y, v_d_x, v_d_y] = fields;
     let out = [
         m_d.as_mut_ptr(),
@@ -345,20 +368,47 @@ fn tail_row_avx2<const FIELDS: bool>(
         v_d_x.as_mut_ptr(),
         v_d_y.as_mut_ptr(),
     ];
+    // The magnitudes' extremes as `Extremes::add_all` finds them: minima
+    // and maxima of their bits (non-negative `f32`s order as their bits).
+    let empty = Extremes::EMPTY;
+    let mut min = [_mm256_set1_epi32(empty.min.to_bits() as i32); 2];
+    let mut max = [_mm256_set1_epi32(empty.max.to_bits() as i32); 2];
     for b in 0..whole {
         let at = BLOCK * b;
-        // SAFETY: block `b < nb` lies in every sums row, and `at + 8 ≤ w`
+        // SAFETY: block `b < nb` lies in both rings, and `at + 8 ≤ w`
         // in `V` and the outputs (the fields when `FIELDS`): the lengths
         // checked above.
         unsafe {
-            let (abc, pq) = block_sums(ints, floats, b);
+            let (abc, pq) = block_sums::<FIRST>(ints, floats, b);
             let v = [load(vx.as_ptr().add(at)), load(vy.as_ptr().add(at))];
             let px = pixels(&c, abc, pq, v);
+            if !FIELDS {
+                let bits = [_mm256_castps_si256(px.m_d), _mm256_castps_si256(px.m_c)];
+                for k in 0..2 {
+                    min[k] = _mm256_min_epu32(min[k], bits[k]);
+                    max[k] = _mm256_max_epu32(max[k], bits[k]);
+                }
+            }
             for (row, lanes) in out.iter().zip(outputs::<FIELDS>(&c, &px)) {
                 store_f(row.add(at), lanes);
             }
         }
     }
+    let mut extremes = [0, 1].map(|k| {
+        let (mut lo, mut hi) = ([0u32; BLOCK], [0u32; BLOCK]);
+        // SAFETY: eight lanes into local arrays of eight.
+        unsafe {
+            store(lo.as_mut_ptr().cast(), min[k]);
+            store(hi.as_mut_ptr().cast(), max[k]);
+        }
+        let fold = |lanes: [u32; BLOCK], pick: fn(u32, u32) -> u32, from: u32| {
+            f32::from_bits(lanes.into_iter().fold(from, pick))
+        };
+        Extremes {
+            min: fold(lo, u32::min, empty.min.to_bits()),
+            max: fold(hi, u32::max, empty.max.to_bits()),
+        }
+    });
     if whole < nb {
         // The last, partial block: `V` past the row's end reads as 0, and
         // only the row's columns are written.
@@ -372,10 +422,10 @@ fn tail_row_avx2<const FIELDS: bool>(
         };
         let (vx, vy) = (padded(vx), padded(vy));
         let mut local = [[0.0f32; BLOCK]; 6];
-        // SAFETY: block `whole < nb` lies in every sums row; `V` and the
+        // SAFETY: block `whole < nb` lies in both rings; `V` and the
         // results are local arrays of eight lanes.
         unsafe {
-            let (abc, pq) = block_sums(ints, floats, whole);
+            let (abc, pq) = block_sums::<FIRST>(ints, floats, whole);
             let px = pixels(&c, abc, pq, [load(vx.as_ptr()), load(vy.as_ptr())]);
             for (row, lanes) in local.iter_mut().zip(outputs::<FIELDS>(&c, &px)) {
                 store_f(row.as_mut_ptr(), lanes);
@@ -387,45 +437,50 @@ fn tail_row_avx2<const FIELDS: bool>(
                 *o = x;
             }
         }
+        for (extremes, lanes) in extremes.iter_mut().zip(&local) {
+            extremes.add_all(lanes.get(..w - at).unwrap_or(&[]));
+        }
     }
+    let [m_d, m_c] = extremes;
+    ExtremesSink { m_d, m_c }
 }
 
-/// The vertical `G` of block `b` of each channel: `a, b, c` and `p, q`.
+/// The vertical `G` of block `b` of each channel: `a, b, c` and `p, q`,
+/// from the five rows of the rings from slot `FIRST` on.
 ///
 /// # Safety
-/// Block `b` lies in each of the rows.
+/// Block `b` lies in both rings.
 #[inline]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn block_sums(
-    ints: [*const i32; 5],
-    floats: [*const f32; 5],
+unsafe fn block_sums<const FIRST: usize>(
+    ints: *const i32,
+    floats: *const f32,
     b: usize,
 ) -> ([__m256i; INTS], [__m256; FLOATS]) {
-    let [i0, i1, i2, i3, i4] = ints;
-    let [f0, f1, f2, f3, f4] = floats;
+    let slot = |k: usize| (FIRST + k) % SUM_DEPTH;
     let int = |ch: usize| {
-        let at = b * INT_BLOCK + ch * BLOCK;
+        let tap = |k| at(INTS, b, slot(k), ch);
         // SAFETY: the caller's.
         unsafe {
             binomial(
-                load(i0.add(at)),
-                load(i1.add(at)),
-                load(i2.add(at)),
-                load(i3.add(at)),
-                load(i4.add(at)),
+                load(ints.add(tap(0))),
+                load(ints.add(tap(1))),
+                load(ints.add(tap(2))),
+                load(ints.add(tap(3))),
+                load(ints.add(tap(4))),
             )
         }
     };
     let float = |ch: usize| {
-        let at = b * FLOAT_BLOCK + ch * BLOCK;
+        let tap = |k| at(FLOATS, b, slot(k), ch);
         // SAFETY: the caller's.
         unsafe {
             binomial_f(
-                load_f(f0.add(at)),
-                load_f(f1.add(at)),
-                load_f(f2.add(at)),
-                load_f(f3.add(at)),
-                load_f(f4.add(at)),
+                load_f(floats.add(tap(0))),
+                load_f(floats.add(tap(1))),
+                load_f(floats.add(tap(2))),
+                load_f(floats.add(tap(3))),
+                load_f(floats.add(tap(4))),
             )
         }
     };

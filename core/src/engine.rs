@@ -57,6 +57,21 @@ pub trait Sink {
     fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
         let _ = (y, x, luma);
     }
+
+    /// [`Sink::kept_row`], with the extremes of the two rows, where the
+    /// engine found them as it wrote them (its AVX2 tail): a sink that
+    /// keeps the frame's extremes merges these instead of reading the rows
+    /// again. By default [`Sink::kept_row`].
+    fn kept_row_with_extremes(
+        &mut self,
+        y: usize,
+        x: usize,
+        luma: &[u8],
+        extremes: crate::ExtremesSink,
+    ) {
+        let _ = extremes;
+        self.kept_row(y, x, luma);
+    }
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
@@ -78,6 +93,17 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     #[inline(always)]
     fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
         (**self).kept_row(y, x, luma)
+    }
+
+    #[inline(always)]
+    fn kept_row_with_extremes(
+        &mut self,
+        y: usize,
+        x: usize,
+        luma: &[u8],
+        extremes: crate::ExtremesSink,
+    ) {
+        (**self).kept_row_with_extremes(y, x, luma, extremes)
     }
 }
 
@@ -357,8 +383,9 @@ struct Rows<'m> {
 /// channels in blocks (`avx2`; the same memory).
 enum SumRing<'m, T, const K: usize> {
     Planar([RowRing<'m, T, SUM_DEPTH>; K]),
+    /// The ring's memory, `SUM_DEPTH · K · cols` values (`avx2`'s layout).
     #[cfg(target_arch = "x86_64")]
-    Blocked(RowRing<'m, T, SUM_DEPTH>),
+    Blocked(&'m mut [T]),
 }
 
 impl<'m, T, const K: usize> SumRing<'m, T, K> {
@@ -367,7 +394,7 @@ impl<'m, T, const K: usize> SumRing<'m, T, K> {
     fn carve(memory: &mut &'m mut [T], cols: usize, blocked: bool) -> Self {
         #[cfg(target_arch = "x86_64")]
         if blocked {
-            return Self::Blocked(RowRing::carve(memory, K * cols));
+            return Self::Blocked(crate::ring::take(memory, SUM_DEPTH * K * cols));
         }
         let _ = blocked;
         Self::Planar(core::array::from_fn(|_| RowRing::carve(memory, cols)))
@@ -379,7 +406,7 @@ impl<'m, T, const K: usize> SumRing<'m, T, K> {
         match self {
             Self::Planar(rings) => SumRow::Planar(rings.each_mut().map(|ring| ring.row_mut(t))),
             #[cfg(target_arch = "x86_64")]
-            Self::Blocked(ring) => SumRow::Blocked(ring.row_mut(t)),
+            Self::Blocked(ring) => SumRow::Blocked(ring, t % SUM_DEPTH),
         }
     }
 }
@@ -404,8 +431,9 @@ fn tail_input<'a>(
     #[cfg(target_arch = "x86_64")]
     if let (Some(avx2), SumRing::Blocked(ints), SumRing::Blocked(floats)) = (avx2, sums.0, sums.1) {
         let rows = crate::avx2::BlockedRows {
-            ints: ints.rows(o - SUM_RADIUS),
-            floats: floats.rows(o - SUM_RADIUS),
+            ints,
+            floats,
+            first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
             v,
         };
         return TailInput::Blocked(avx2, rows);
@@ -426,13 +454,17 @@ enum TailInput<'a> {
 }
 
 impl TailInput<'_> {
-    /// The tail of the row into `out`.
+    /// The tail of the row into `out`, and the extremes of the magnitudes
+    /// where the tail found them.
     #[inline(always)]
-    fn run(&self, constants: &TailConstants, out: TailOut<'_>) {
+    fn run(&self, constants: &TailConstants, out: TailOut<'_>) -> Option<crate::ExtremesSink> {
         match self {
-            Self::Planar(rows) => tail_row(constants, rows, out),
+            Self::Planar(rows) => {
+                tail_row(constants, rows, out);
+                None
+            }
             #[cfg(target_arch = "x86_64")]
-            Self::Blocked(avx2, rows) => crate::avx2::tail_row(*avx2, constants, rows, out),
+            Self::Blocked(avx2, rows) => Some(crate::avx2::tail_row(*avx2, constants, rows, out)),
         }
     }
 }
@@ -440,8 +472,9 @@ impl TailInput<'_> {
 /// One row of a [`SumRing`].
 enum SumRow<'a, T, const K: usize> {
     Planar([&'a mut [T]; K]),
+    /// The ring's memory and the row's slot.
     #[cfg(target_arch = "x86_64")]
-    Blocked(&'a mut [T]),
+    Blocked(&'a mut [T], usize),
 }
 
 impl<'m> Rows<'m> {
@@ -643,8 +676,8 @@ impl Pass<'_> {
             let sums = match (rows.int_sums.row_mut(j), rows.float_sums.row_mut(j)) {
                 (SumRow::Planar(ints), SumRow::Planar(floats)) => Sums::Planar(ints, floats),
                 #[cfg(target_arch = "x86_64")]
-                (SumRow::Blocked(ints), SumRow::Blocked(floats)) => match rows.avx2 {
-                    Some(avx2) => Sums::Blocked(avx2, ints, floats),
+                (SumRow::Blocked(ints, slot), SumRow::Blocked(floats, _)) => match rows.avx2 {
+                    Some(avx2) => Sums::Blocked(avx2, ints, floats, slot),
                     None => return, // never: blocked rings come with the kernels
                 },
                 #[cfg(target_arch = "x86_64")]
@@ -710,8 +743,12 @@ impl Pass<'_> {
         if !reads_fields {
             let (y, x) = at();
             if let Some(m) = sink.magnitude_rows(y, x, width) {
-                tail_rows.run(&constants, TailOut { m, fields: None });
-                sink.kept_row(y, x, first(from_first_output(rows.p0.row(o)), width));
+                let extremes = tail_rows.run(&constants, TailOut { m, fields: None });
+                let luma = first(from_first_output(rows.p0.row(o)), width);
+                match extremes {
+                    Some(extremes) => sink.kept_row_with_extremes(y, x, luma, extremes),
+                    None => sink.kept_row(y, x, luma),
+                }
                 return;
             }
         }

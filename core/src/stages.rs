@@ -883,9 +883,10 @@ pub enum Sums<'a> {
         [&'a mut [i32]; INT_CHANNELS],
         [&'a mut [f32]; FLOAT_CHANNELS],
     ),
-    /// Blocks of all integer channels, of both `f32` channels.
+    /// The integer and the `f32` rings' memory in blocks, and the row's
+    /// slot (`avx2`).
     #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, &'a mut [i32], &'a mut [f32]),
+    Blocked(crate::Avx2, &'a mut [i32], &'a mut [f32], usize),
 }
 
 /// The five products on `[5, n−5)`, then their horizontal `G` on
@@ -911,10 +912,10 @@ pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n:
             }
         }
         #[cfg(target_arch = "x86_64")]
-        Sums::Blocked(avx2, int_sums, float_sums) => {
+        Sums::Blocked(avx2, int_sums, float_sums, slot) => {
             let ints = int_products.each_ref().map(|row| &row[..]);
             let floats = float_products.each_ref().map(|row| &row[..]);
-            crate::avx2::horizontal_sums(avx2, ints, floats, int_sums, float_sums, n);
+            crate::avx2::horizontal_sums(avx2, ints, floats, (int_sums, float_sums, slot), n);
         }
     }
 }

@@ -507,6 +507,17 @@ impl Sink for KeptMagnitudes<'_> {
     }
 
     #[inline(always)]
+    fn kept_row_with_extremes(
+        &mut self,
+        _y: usize,
+        _x: usize,
+        _luma: &[u8],
+        extremes: ExtremesSink,
+    ) {
+        self.extremes.merge(extremes);
+    }
+
+    #[inline(always)]
     fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
         let range = self.range(y, x, luma.len());
         let [m_d, m_c] = &self.planes;
