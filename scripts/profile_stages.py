@@ -45,6 +45,14 @@ STAGES = [
     ("row", "– the bytes (`RgbSink`)", "emit"),
 ]
 
+# The core's AVX2 kernels (`core/src/avx2.rs`), out-of-line functions of
+# their own: (symbol part, their stage keys given the frames inlined there).
+KERNELS = [
+    ("avx2::horizontal_sums_avx2", lambda frames: ["structure_row"]),
+    ("avx2::tail_row_avx2",
+     lambda frames: ["emit", "emit/structure_sums" if "block_sums" in frames else "emit/tail_row"]),
+]
+
 
 def callgrind_counts(path, binary):
     """{address: executions} of the instructions of `binary` in a callgrind
@@ -80,10 +88,11 @@ def callgrind_counts(path, binary):
             a, l, cost = parts[0], parts[1], parts[2]
             if a.startswith("0x"):
                 addr = int(a, 16)
-            elif a[0] == "+":
-                addr += int(a[1:], 16)
-            elif a[0] == "-":
-                addr -= int(a[1:], 16)
+            elif a[0] in "+-":
+                # A relative position is decimal unless it says 0x.
+                step = a[1:]
+                step = int(step, 16) if step.startswith("0x") else int(step)
+                addr += step if a[0] == "+" else -step
             if skip_next:
                 skip_next = False
                 continue
@@ -210,13 +219,17 @@ def stage_sums(binary, weights_list):
         i = bisect.bisect_right(starts, pc) - 1
         if i < 0 or pc >= funcs[i][1]:
             continue
-        # The pass: the runtime-dispatched function everything is inlined in.
-        if "dispatch::" in funcs[i][2]:
+        # The pass: the runtime-dispatched function everything is inlined
+        # in, and the core's AVX2 kernels it calls out of line.
+        kernel = next((keys for name, keys in KERNELS if name in funcs[i][2]), None)
+        if "dispatch::" in funcs[i][2] or kernel is not None:
             in_pass.add(pc)
         j = bisect.bisect_right(range_starts, pc)
         frames = [name for _, name in sorted((d, name) for lo, hi, d, name in ranges[max(0, j - 4000):j] if lo <= pc < hi)]
         keys = []
-        if "push" in frames:
+        if kernel is not None:
+            keys = kernel(frames)
+        elif "push" in frames:
             k = frames.index("push")
             if k + 1 < len(frames):
                 keys.append(frames[k + 1])
