@@ -10,6 +10,7 @@
 //! |---|---|---|
 //! | `d = p1 − p0` | i16 | 255 |
 //! | vertical parts of `Kb3 ⋆ d`, `Box⋆Sob ⋆ d` | i16 | `12 · 255 = 3060` |
+//! | their horizontal parts (vector rows; `Kb3 ⋆ d`, `Box⋆Sob ⋆ d`) | i16 | `48 · 255 = 12 240` |
 //! | `E = Kb3 ⋆ d − 3 · Box⋆Sob ⋆ d` (`= 3·255·(B − S)`) | i32 | `132 · 255 = 33 660` |
 //! | vertical `G` of `E` | i32 | `16 · 33 660 = 538 560` |
 //! | `V = G256 ⋆ E` (`v_c = V · s/768`) | i32 | `26 880 · 255 = 6 854 400 < 2²³` |
@@ -384,7 +385,7 @@ fn horizontal_parts(
 #[cfg_attr(not(dispatched_pass), inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn component_of(
-    formula: impl Fn([i32; 5], [i32; 5]) -> i32,
+    formula: impl Fn([i16; 5], [i16; 5]) -> i32,
     a: &[i16],
     b: &[i16],
     c: &[i16],
@@ -420,30 +421,35 @@ fn component_of(
         return;
     };
     for k in 0..len {
-        let first = [a[k], b[k], c[k], d[k], e[k]].map(i32::from);
-        let second = [f[k], g[k], h[k], i[k], j[k]].map(i32::from);
-        out[k] = formula(first, second);
+        out[k] = formula(
+            [a[k], b[k], c[k], d[k], e[k]],
+            [f[k], g[k], h[k], i[k], j[k]],
+        );
     }
 }
 
 /// `E` x of one column from the taps `k ∈ [0, 5)` (column offsets `k − 2`)
-/// of its vertical parts `[1 4 1]ᵀ ⋆ d` and `[1 3 4 3 1]ᵀ ⋆ d`.
+/// of its vertical parts `[1 4 1]ᵀ ⋆ d` (within ±1530) and
+/// `[1 3 4 3 1]ᵀ ⋆ d` (±3060). Both horizontal parts fit in i16 (`Kbx3`
+/// ±3060, `Box⋆Sobx` ±12 240), so vector lanes take them sixteen a step and
+/// widen two values, not six taps; `E` itself (±33 660) is i32.
 #[inline(always)]
-fn boundary_minus_domain_x(v1: [i32; 5], v2: [i32; 5]) -> i32 {
+fn boundary_minus_domain_x(v1: [i16; 5], v2: [i16; 5]) -> i32 {
     let kb_x = v1[3] - v1[1];
     let bs_x = (v2[3] + v2[4]) - (v2[1] + v2[0]);
-    let e = kb_x - 3 * bs_x;
+    let e = i32::from(kb_x) - 3 * i32::from(bs_x);
     debug_assert!(e.abs() <= E_MAX, "E x = {e}");
     e
 }
 
 /// `E` y of one column from the taps of its vertical parts `[−1 0 1]ᵀ ⋆ d`
-/// and `[−1 −1 0 1 1]ᵀ ⋆ d`.
+/// (±510) and `[−1 −1 0 1 1]ᵀ ⋆ d` (±1020): the horizontal parts in i16
+/// (`Kby3` ±3060, `Box⋆Soby` ±12 240), `E` in i32, as for x.
 #[inline(always)]
-fn boundary_minus_domain_y(v3: [i32; 5], v4: [i32; 5]) -> i32 {
+fn boundary_minus_domain_y(v3: [i16; 5], v4: [i16; 5]) -> i32 {
     let kb_y = v3[1] + 4 * v3[2] + v3[3];
     let bs_y = (v4[0] + v4[4]) + 3 * (v4[1] + v4[3]) + 4 * v4[2];
-    let e = kb_y - 3 * bs_y;
+    let e = i32::from(kb_y) - 3 * i32::from(bs_y);
     debug_assert!(e.abs() <= E_MAX, "E y = {e}");
     e
 }
