@@ -37,6 +37,7 @@ use core::arch::x86_64::{
 };
 
 use crate::schedule::{HALO, SUM_DEPTH};
+use crate::stages::Sample;
 use crate::tail::{TailConstants, TailOut};
 use crate::{Extremes, ExtremesSink};
 
@@ -148,6 +149,99 @@ fn binomial_f(a: __m256, b: __m256, c: __m256, d: __m256, e: __m256) -> __m256 {
     _mm256_add_ps(sum, _mm256_mul_ps(c, _mm256_set1_ps(6.0)))
 }
 
+/// The two kinds of sums in lanes, eight values a vector: exact `i32`s
+/// ([`binomial`]) and `f32`s ([`binomial_f`]).
+trait Lanes: Sized {
+    type Vector;
+
+    /// The binomial of the eight-lane vectors at the five taps.
+    ///
+    /// # Safety
+    /// Each tap points to eight readable values.
+    unsafe fn binomial_at(taps: [*const Self; 5]) -> Self::Vector;
+
+    /// Eight lanes to `p`.
+    ///
+    /// # Safety
+    /// `p` points to eight writable values nothing else borrows.
+    unsafe fn store_at(p: *mut Self, v: Self::Vector);
+}
+
+impl Lanes for i32 {
+    type Vector = __m256i;
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn binomial_at([a, b, c, d, e]: [*const i32; 5]) -> __m256i {
+        // SAFETY: the caller's.
+        unsafe { binomial(load(a), load(b), load(c), load(d), load(e)) }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn store_at(p: *mut i32, v: __m256i) {
+        // SAFETY: the caller's.
+        unsafe { store(p, v) }
+    }
+}
+
+impl Lanes for f32 {
+    type Vector = __m256;
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn binomial_at([a, b, c, d, e]: [*const f32; 5]) -> __m256 {
+        // SAFETY: the caller's.
+        unsafe { binomial_f(load_f(a), load_f(b), load_f(c), load_f(d), load_f(e)) }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn store_at(p: *mut f32, v: __m256) {
+        // SAFETY: the caller's.
+        unsafe { store_f(p, v) }
+    }
+}
+
+/// The horizontal `G` of block `b` of `K` product rows (taps from window
+/// column `first`) into their channels' lanes of slot `slot` of a ring.
+///
+/// # Safety
+/// Every row holds `first + 12` values, and block `b` lies in the ring.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn row_sums<T: Lanes, const K: usize>(
+    rows: &[&[T]; K],
+    first: usize,
+    ring: *mut T,
+    (b, slot): (usize, usize),
+) {
+    for (ch, row) in rows.iter().enumerate() {
+        let p = row.as_ptr();
+        // SAFETY: the caller's.
+        unsafe {
+            let sum = T::binomial_at(core::array::from_fn(|t| p.add(first + t)));
+            T::store_at(ring.add(at(K, b, slot, ch)), sum);
+        }
+    }
+}
+
+/// The vertical `G` of block `b` of channel `ch` of a ring of `K`
+/// channels, from the five rows from slot `first` on.
+///
+/// # Safety
+/// Block `b` lies in the ring.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn column_sum<T: Lanes, const K: usize>(
+    ring: *const T,
+    (b, first, ch): (usize, usize, usize),
+) -> T::Vector {
+    let tap = |k: usize| at(K, b, (first + k) % SUM_DEPTH, ch);
+    // SAFETY: the caller's.
+    unsafe { T::binomial_at(core::array::from_fn(|k| ring.add(tap(k)))) }
+}
+
 /// The horizontal `G` of the five products of a row (window columns,
 /// valid on `[5, n − 5)`) into slot `slot` of both sums rings. The last
 /// block's lanes past the row's last output column get sums of columns
@@ -197,74 +291,40 @@ fn horizontal_sums_avx2(
     let (int_out, float_out) = (int_ring.as_mut_ptr(), float_ring.as_mut_ptr());
     for b in 0..whole {
         let first = HALO - 2 + BLOCK * b;
-        for (ch, row) in ints.iter().enumerate() {
-            let p = row.as_ptr();
-            // SAFETY: `first + 12 ≤ len` (`whole`), and block `b < nb`
-            // lies in the ring.
-            unsafe {
-                let sum = binomial(
-                    load(p.add(first)),
-                    load(p.add(first + 1)),
-                    load(p.add(first + 2)),
-                    load(p.add(first + 3)),
-                    load(p.add(first + 4)),
-                );
-                store(int_out.add(at(INTS, b, slot, ch)), sum);
-            }
-        }
-        for (ch, row) in floats.iter().enumerate() {
-            let p = row.as_ptr();
-            // SAFETY: as above.
-            unsafe {
-                let sum = binomial_f(
-                    load_f(p.add(first)),
-                    load_f(p.add(first + 1)),
-                    load_f(p.add(first + 2)),
-                    load_f(p.add(first + 3)),
-                    load_f(p.add(first + 4)),
-                );
-                store_f(float_out.add(at(FLOATS, b, slot, ch)), sum);
-            }
+        // SAFETY: `first + 12 ≤ len` (`whole`), and block `b < nb` lies in
+        // both rings.
+        unsafe {
+            row_sums(&ints, first, int_out, (b, slot));
+            row_sums(&floats, first, float_out, (b, slot));
         }
     }
     // A last block whose taps would pass a row's end: its lanes one at a
     // time, those whose taps lie in the row.
     for b in whole..nb {
         let first = HALO - 2 + BLOCK * b;
-        for (ch, row) in ints.iter().enumerate() {
-            let out = int_ring
-                .get_mut(at(INTS, b, slot, ch)..)
-                .and_then(|r| r.first_chunk_mut());
-            if let Some(out) = out {
-                scalar_taps(row, first, out, |a, b, c, d, e| {
-                    (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
-                });
-            }
-        }
-        for (ch, row) in floats.iter().enumerate() {
-            let out = float_ring
-                .get_mut(at(FLOATS, b, slot, ch)..)
-                .and_then(|r| r.first_chunk_mut());
-            if let Some(out) = out {
-                scalar_taps(row, first, out, |a, b, c, d, e| {
-                    ((a + e) + (b + d) * 4.0) + c * 6.0
-                });
-            }
-        }
+        scalar_sums(&ints, first, int_ring, (b, slot));
+        scalar_sums(&floats, first, float_ring, (b, slot));
     }
 }
 
-/// The lanes of a block whose five taps all lie in `row`, one at a time.
+/// [`row_sums`] one lane at a time, the lanes whose five taps lie in the
+/// row (`Sample::binomial`, the portable sum); the others keep what they
+/// held.
 #[inline(never)]
-fn scalar_taps<T: Copy>(
-    row: &[T],
+fn scalar_sums<T: Sample, const K: usize>(
+    rows: &[&[T]; K],
     first: usize,
-    out: &mut [T; BLOCK],
-    binomial: impl Fn(T, T, T, T, T) -> T,
+    ring: &mut [T],
+    (b, slot): (usize, usize),
 ) {
-    for (j, out) in out.iter_mut().enumerate() {
-        if let Some(&[a, b, c, d, e]) = row.get(first + j..).and_then(|t| t.first_chunk()) {
-            *out = binomial(a, b, c, d, e);
+    for (ch, row) in rows.iter().enumerate() {
+        let out = ring
+            .get_mut(at(K, b, slot, ch)..)
+            .and_then(|r| r.first_chunk_mut::<BLOCK>());
+        for (j, out) in out.into_iter().flatten().enumerate() {
+            if let Some(&[a, b, c, d, e]) = row.get(first + j..).and_then(|t| t.first_chunk()) {
+                *out = T::binomial(a, b, c, d, e);
+            }
         }
     }
 }
@@ -457,33 +517,10 @@ unsafe fn block_sums<const FIRST: usize>(
     floats: *const f32,
     b: usize,
 ) -> ([__m256i; INTS], [__m256; FLOATS]) {
-    let slot = |k: usize| (FIRST + k) % SUM_DEPTH;
-    let int = |ch: usize| {
-        let tap = |k| at(INTS, b, slot(k), ch);
-        // SAFETY: the caller's.
-        unsafe {
-            binomial(
-                load(ints.add(tap(0))),
-                load(ints.add(tap(1))),
-                load(ints.add(tap(2))),
-                load(ints.add(tap(3))),
-                load(ints.add(tap(4))),
-            )
-        }
-    };
-    let float = |ch: usize| {
-        let tap = |k| at(FLOATS, b, slot(k), ch);
-        // SAFETY: the caller's.
-        unsafe {
-            binomial_f(
-                load_f(floats.add(tap(0))),
-                load_f(floats.add(tap(1))),
-                load_f(floats.add(tap(2))),
-                load_f(floats.add(tap(3))),
-                load_f(floats.add(tap(4))),
-            )
-        }
-    };
+    // SAFETY: the caller's.
+    let int = |ch| unsafe { column_sum::<i32, INTS>(ints, (b, FIRST, ch)) };
+    // SAFETY: the caller's.
+    let float = |ch| unsafe { column_sum::<f32, FLOATS>(floats, (b, FIRST, ch)) };
     ([int(0), int(1), int(2)], [float(0), float(1)])
 }
 
