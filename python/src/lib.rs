@@ -55,11 +55,11 @@ struct Slot<'a>(&'a mut [u8]);
 
 impl ByteBuffer for Slot<'_> {
     fn overwrite(&mut self, len: usize) -> Result<&mut [u8], HostError> {
-        let have = self.0.len();
-        self.0
-            .get_mut(..len)
-            .filter(|s| s.len() == have)
-            .ok_or_else(|| HostError::invalid("out", format!("{have} bytes for an image of {len}")))
+        if len != self.0.len() {
+            let why = format!("{} bytes for an image of {len}", self.0.len());
+            return Err(HostError::invalid("out", why));
+        }
+        Ok(self.0)
     }
 }
 
@@ -435,7 +435,7 @@ impl Stream {
         let shape = layout.shape(None, self.height, self.width);
         // Checked even for the first frame, which writes nothing: a wrong
         // out fails at once, not one frame later.
-        let mut output = Output::new(py, out.filter(|o| !o.is_none()), &shape)?;
+        let mut output = Output::new(py, out, &shape)?;
         let view = f.view();
         let prev = self.prev.take();
         let worker = &self.worker;
