@@ -1,6 +1,8 @@
 //! Arrays in: uint8 frames of any strides and flow arrays, checked
 //! (`TypeError` for the type, dtype or number of dimensions, `ValueError`
-//! for the shape) and read without the GIL into the host's [`Gray`].
+//! for the shape) and read without the GIL into the host's [`Gray`]; and
+//! arrays out: the `out=` array results are written into, checked the same
+//! way.
 //!
 //! Besides `numpy.ndarray`, anything that exports its memory to NumPy
 //! without a copy: an object with `__dlpack__` on the CPU (a torch tensor,
@@ -11,8 +13,8 @@
 
 use numpy::ndarray::{ArrayViewD, Ix3};
 use numpy::{
-    PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray,
-    PyUntypedArrayMethods, dtype,
+    PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyReadwriteArrayDyn,
+    PyUntypedArray, PyUntypedArrayMethods, dtype,
 };
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -136,6 +138,79 @@ impl<'py> Frames<'py> {
     /// The pixels, readable without the GIL while `self` lives.
     pub fn view(&self) -> ArrayViewD<'_, u8> {
         self.array.as_array()
+    }
+}
+
+/// The array a result is written into: `out=` (checked: uint8, the
+/// result's shape, C-contiguous, writable) or a new one.
+pub struct Output<'py> {
+    /// What the function returns: `out` itself, or the new array.
+    pub object: Bound<'py, PyAny>,
+    array: PyReadwriteArrayDyn<'py, u8>,
+}
+
+impl<'py> Output<'py> {
+    /// `out` if given (checked against `shape`), else a new zeroed array
+    /// of `shape` (zeroed by the system's untouched pages, not by a pass).
+    pub fn new(py: Python<'py>, out: Option<Bound<'py, PyAny>>, shape: &[usize]) -> PyResult<Self> {
+        let Some(obj) = out else {
+            let array = PyArrayDyn::<u8>::zeros(py, shape, false);
+            return Ok(Self {
+                object: array.clone().into_any(),
+                array: array
+                    .try_readwrite()
+                    .map_err(|e| value_error(format!("out: {e}")))?,
+            });
+        };
+        let array = ndarray(&obj, "out")?;
+        if !array.dtype().is_equiv_to(&dtype::<u8>(py)) {
+            return Err(PyTypeError::new_err(format!(
+                "out: dtype {} is not uint8; give a uint8 array of shape {}",
+                array.dtype(),
+                shape_text(shape)
+            )));
+        }
+        if array.shape() != shape {
+            return Err(value_error(format!(
+                "out: shape {}; the result has shape {}",
+                shape_text(array.shape()),
+                shape_text(shape)
+            )));
+        }
+        if !array.is_c_contiguous() {
+            return Err(value_error(format!(
+                "out: not C-contiguous (strides {:?}); give a contiguous array \
+                 (numpy.empty(shape, numpy.uint8), torch.empty(shape, dtype=torch.uint8))",
+                array.strides()
+            )));
+        }
+        let array = array
+            .cast::<PyArrayDyn<u8>>()?
+            .try_readwrite()
+            .map_err(|e| value_error(format!("out: {e}; give a writable array")))?;
+        Ok(Self { object: obj, array })
+    }
+
+    /// Its bytes, writable without the GIL while `self` lives.
+    pub fn bytes(&mut self) -> &mut [u8] {
+        self.array
+            .as_slice_mut()
+            .expect("C-contiguous: checked or made so")
+    }
+}
+
+/// `shape` as Python writes a tuple: `(2, 3, 4)`, `(5,)`.
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
     }
 }
 

@@ -20,6 +20,7 @@ use reynoldsflow_host::cli::shard::Shard;
 use reynoldsflow_host::cli::status::Record;
 use reynoldsflow_host::fixed_engine::FrameEngine;
 use reynoldsflow_host::outputs::{OutputSpec, PairFields, flo};
+use reynoldsflow_host::page_buffer::ByteBuffer;
 use reynoldsflow_host::pipeline::Compute;
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
@@ -30,7 +31,7 @@ mod frames;
 mod settings;
 
 use errors::{Failure, guarded, host_error, value_error};
-use frames::{Frames, gray};
+use frames::{Frames, Output, gray};
 use settings::{Kwargs, Layout, Settings};
 
 /// The mean length of `v_R = v_c + v_d` over the frame, in pixels per
@@ -40,28 +41,59 @@ fn mean_speed(planes: &FlowPlanes) -> f64 {
     planes.mean_speed()
 }
 
-/// The `--variant` image of one pair in `layout`, with the pair's motion
-/// score when `score` is asked (which needs the fields); otherwise the
-/// bytes alone, as `run` computes them when it writes images only.
-fn pair_image(
+/// One thread's reused memory for pairs: the engine's, and the
+/// interleaved image a channels-first result is split from.
+#[derive(Default)]
+struct PairWorker {
+    engine: FrameEngine,
+    rgb: Vec<u8>,
+}
+
+/// The bytes of one pair's image written in place: a slice of the result
+/// array, exactly the image's length (the caller's shape check).
+struct Slot<'a>(&'a mut [u8]);
+
+impl ByteBuffer for Slot<'_> {
+    fn overwrite(&mut self, len: usize) -> Result<&mut [u8], HostError> {
+        if len != self.0.len() {
+            let why = format!("{} bytes for an image of {len}", self.0.len());
+            return Err(HostError::invalid("out", why));
+        }
+        Ok(self.0)
+    }
+}
+
+/// The `--variant` image of one pair written into `out` (its `3·H·W`
+/// bytes) in `layout`; the pair's motion score when `score` is asked
+/// (which needs the fields), else 0. Without the fields, as `run` computes
+/// images only, an (H, W, 3) image is written straight into `out`, a
+/// channels-first one split into it from the worker's reused buffer.
+fn pair_into(
     compute: &Compute,
     spec: &OutputSpec,
-    engine: &mut FrameEngine,
+    worker: &mut PairWorker,
     (prev, next): (&Gray, &Gray),
     layout: Layout,
     score: bool,
-) -> Result<(Vec<u8>, f64), HostError> {
-    let (h, w) = (prev.height, prev.width);
-    let (image, motion) = if score || spec.image_needs_fields() {
-        let fields = compute.pair_with(engine, prev, next)?;
-        (spec.image(&fields), mean_speed(&fields.planes))
-    } else {
-        let mut rgb = Vec::new();
-        compute.representation(engine, prev, next, &mut rgb)?;
-        spec.arrange(&mut rgb);
-        (rgb, 0.0)
-    };
-    Ok((settings::arrange(image, h, w, layout), motion))
+    out: &mut [u8],
+) -> Result<f64, HostError> {
+    if score || spec.image_needs_fields() {
+        let fields = compute.pair_with(&mut worker.engine, prev, next)?;
+        layout.place(&spec.image(&fields), out);
+        return Ok(mean_speed(&fields.planes));
+    }
+    match layout {
+        Layout::Hwc => {
+            compute.representation(&mut worker.engine, prev, next, &mut Slot(&mut *out))?;
+            spec.arrange(out);
+        }
+        Layout::Chw => {
+            compute.representation(&mut worker.engine, prev, next, &mut worker.rgb)?;
+            spec.arrange(&mut worker.rgb);
+            layout.place(&worker.rgb, out);
+        }
+    }
+    Ok(0.0)
 }
 
 /// An array of `shape` owning `data` (no copy).
@@ -123,7 +155,7 @@ fn represent<'py>(
     let fields = compute_pair(py, &settings, &p, &n)?;
     let spec = settings.output_spec();
     let layout = settings.layout();
-    let image = py.detach(|| settings::arrange(spec.image(&fields), h, w, layout));
+    let image = py.detach(|| settings::arrange(spec.image(&fields), layout));
     array(py, image, &layout.shape(None, h, w))
 }
 
@@ -187,7 +219,7 @@ fn motion_score<'py>(
 
 /// represent_clip(frames, *, keep_count=False, threads=None,
 /// return_scores=False, step=None, fps=None, source_fps=None, resize=None,
-/// short_side=None, layout="hwc", engine="fixed", scale="minmax", ...)
+/// short_side=None, layout="hwc", out=None, engine="fixed", scale="minmax", ...)
 ///
 /// Every consecutive pair of a (T, H, W) or (T, H, W, 1) uint8 clip: a
 /// (T - 1, H, W, 3) array whose image i is represent(frames[i],
@@ -202,6 +234,12 @@ fn motion_score<'py>(
 /// floor(k * source_fps / F)); resize=(W, H) or short_side=N resizes the
 /// frames taken first, as `reynoldsflow run --step/--fps/--resize/
 /// --short-side` do. layout="chw" returns (T - 1, 3, H, W).
+///
+/// out= a writable, C-contiguous uint8 array (or CPU tensor) of the
+/// result's shape: the images are written into it, each pair's straight
+/// into its place, and it is returned instead of a new array (a DataLoader
+/// worker hands torch a tensor in shared memory this way, so nothing is
+/// copied on the way to the main process).
 #[pyfunction]
 #[pyo3(signature = (frames, **options))]
 fn represent_clip<'py>(
@@ -216,7 +254,13 @@ fn represent_clip<'py>(
         &[
             settings::IMAGE_KEYS,
             settings::FRAME_KEYS,
-            &["keep_count", "threads", "return_scores", "source_fps"],
+            &[
+                "keep_count",
+                "threads",
+                "return_scores",
+                "source_fps",
+                "out",
+            ],
         ]
         .concat(),
     )?;
@@ -225,6 +269,7 @@ fn represent_clip<'py>(
     let threads = kw.threads()?;
     let plan = kw.frame_args()?.plan();
     let source_fps = kw.rate("source_fps")?;
+    let out = kw.object("out")?;
     let settings = Settings::parse(kw)?;
     let compute = settings.compute()?;
     let spec = settings.output_spec();
@@ -252,45 +297,55 @@ fn represent_clip<'py>(
         )));
     }
     let (w, h) = plan.size.map_or((w, h), |size| size.of(w, h));
-    let view = clip.view();
-    let frame_bytes = 3 * h * w;
     let results = picked.len() - 1;
-    let (rgb, scores) = py
+    let count = results + usize::from(keep_count);
+    let mut output = Output::new(py, out, &layout.shape(Some(count), h, w))?;
+    let view = clip.view();
+    let rgb = output.bytes();
+    let scores = py
         .detach(|| {
             guarded(|| {
                 let grays = picked
                     .iter()
                     .map(|&i| sized(gray(view.index_axis(Axis(0), i))?, &plan))
                     .collect::<Result<Vec<Gray>, HostError>>()?;
-                let mut rgb = vec![0u8; (results + usize::from(keep_count)) * frame_bytes];
-                let mut scores = vec![0.0f64; results];
-                let pairs =
-                    workers::map_indices(threads, results, FrameEngine::new, |engine, i| {
+                let frame_bytes = 3 * h * w;
+                let (images, kept) = rgb.split_at_mut(results * frame_bytes);
+                // Each pair's bytes, taken by the one thread that computes it.
+                let slots: Vec<Mutex<&mut [u8]>> = images
+                    .chunks_exact_mut(frame_bytes)
+                    .map(Mutex::new)
+                    .collect();
+                let scores =
+                    workers::map_indices(threads, results, PairWorker::default, |worker, i| {
                         let pair = (&grays[i], &grays[i + 1]);
-                        pair_image(&compute, &spec, engine, pair, layout, return_scores)
-                    });
-                for (i, pair) in pairs.into_iter().enumerate() {
-                    let (image, score) = pair?;
-                    rgb[i * frame_bytes..(i + 1) * frame_bytes].copy_from_slice(&image);
-                    scores[i] = score;
-                }
+                        let mut slot = slots[i].lock().expect("one thread takes each pair");
+                        pair_into(
+                            &compute,
+                            &spec,
+                            worker,
+                            pair,
+                            layout,
+                            return_scores,
+                            &mut slot,
+                        )
+                    })
+                    .into_iter()
+                    .collect::<Result<Vec<f64>, HostError>>()?;
+                drop(slots);
                 if keep_count {
-                    rgb.copy_within(
-                        (results - 1) * frame_bytes..results * frame_bytes,
-                        results * frame_bytes,
-                    );
+                    kept.copy_from_slice(&images[(results - 1) * frame_bytes..]);
                 }
-                Ok((rgb, scores))
+                Ok(scores)
             })
         })
         .map_err(Failure::into_pyerr)?;
-    let count = results + usize::from(keep_count);
-    let images = array(py, rgb, &layout.shape(Some(count), h, w))?;
+    let images = output.object;
     if return_scores {
         let scores = PyArray1::from_vec(py, scores);
         Ok((images, scores).into_pyobject(py)?.into_any().unbind())
     } else {
-        Ok(images.into_any().unbind())
+        Ok(images.unbind())
     }
 }
 
@@ -323,7 +378,7 @@ struct Stream {
     settings: Settings,
     prev: Option<Gray>,
     /// Reused from pair to pair.
-    engine: Mutex<FrameEngine>,
+    worker: Mutex<PairWorker>,
 }
 
 #[pymethods]
@@ -348,19 +403,23 @@ impl Stream {
             height,
             settings,
             prev: None,
-            engine: Mutex::new(FrameEngine::new()),
+            worker: Mutex::default(),
         })
     }
 
-    /// push(frame) -> None | (height, width, 3) uint8
+    /// push(frame, *, out=None) -> None | (height, width, 3) uint8
     ///
     /// The representation of (previous frame, frame), or None for the
-    /// first frame since the start or reset().
+    /// first frame since the start or reset(). With out (a writable,
+    /// C-contiguous uint8 array of the result's shape), the image is
+    /// written into it and out returned (untouched when None is returned).
+    #[pyo3(signature = (frame, *, out=None))]
     fn push<'py>(
         &mut self,
         py: Python<'py>,
         frame: &Bound<'py, PyAny>,
-    ) -> PyResult<Option<Bound<'py, PyArrayDyn<u8>>>> {
+        out: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Option<Bound<'py, PyAny>>> {
         let f = Frames::single(frame, "frame")?;
         if f.frame_shape() != (self.height, self.width) {
             return Err(value_error(format!(
@@ -373,22 +432,28 @@ impl Stream {
         let compute = self.settings.compute()?;
         let spec = self.settings.output_spec();
         let layout = self.settings.layout();
+        let shape = layout.shape(None, self.height, self.width);
+        // Checked even for the first frame, which writes nothing: a wrong
+        // out fails at once, not one frame later.
+        let mut output = Output::new(py, out, &shape)?;
         let view = f.view();
         let prev = self.prev.take();
-        let engine = &self.engine;
-        let (next, image) = py
+        let worker = &self.worker;
+        let rgb = output.bytes();
+        let (next, written) = py
             .detach(|| {
                 guarded(|| {
                     let next = gray(view)?;
-                    let image = match &prev {
-                        None => None,
+                    let written = match &prev {
+                        None => false,
                         Some(p) => {
-                            let mut engine = engine.lock().expect("no panic holding it");
+                            let mut worker = worker.lock().expect("no panic holding it");
                             let pair = (p, &next);
-                            Some(pair_image(&compute, &spec, &mut engine, pair, layout, false)?.0)
+                            pair_into(&compute, &spec, &mut worker, pair, layout, false, rgb)?;
+                            true
                         }
                     };
-                    Ok((next, image))
+                    Ok((next, written))
                 })
             })
             .map_err(|e| {
@@ -396,8 +461,7 @@ impl Stream {
                 e.into_pyerr()
             })?;
         self.prev = Some(next);
-        let shape = layout.shape(None, self.height, self.width);
-        image.map(|rgb| array(py, rgb, &shape)).transpose()
+        Ok(written.then_some(output.object))
     }
 
     /// Forget the previous frame: the next push returns None.

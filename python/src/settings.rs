@@ -2,6 +2,7 @@
 //! the command line's `ComputeArgs`/`OutputArgs` (checked by the host the
 //! same way), parsed in one place for every function.
 
+use multiversion::multiversion;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyString, PyTuple};
@@ -81,6 +82,11 @@ impl<'py> Kwargs<'py> {
         let value = self.dict.get_item(key)?;
         self.dict.del_item(key).ok();
         Ok(value.filter(|v| !v.is_none()))
+    }
+
+    /// The object given for `key` (not None), unconverted.
+    pub fn object(&mut self, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.take(key)
     }
 
     /// `key` extracted as `T`, with the keyword named in a `TypeError`.
@@ -216,6 +222,20 @@ fn rate(value: &Bound<'_, PyAny>) -> Result<Rate, String> {
     sampled::parse_rate(&text)
 }
 
+/// `rgb`'s R, G and B bytes as three planes, one after the other in
+/// `out`. Compiled for AVX2 too, chosen at run time: the stride-3 reads
+/// vectorise there, about 6x faster than x86-64's baseline (10 against
+/// 65 µs a 320x240 image), a tenth of a pair's computation.
+#[multiversion(targets("x86_64+avx2"))]
+fn planes(rgb: &[u8], out: &mut [u8]) {
+    let pixels = rgb.as_chunks::<3>().0;
+    for (channel, plane) in out.chunks_exact_mut(pixels.len().max(1)).enumerate() {
+        for (byte, pixel) in plane.iter_mut().zip(pixels) {
+            *byte = pixel[channel];
+        }
+    }
+}
+
 /// The memory layout of returned images.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Layout {
@@ -226,24 +246,28 @@ pub enum Layout {
     Chw,
 }
 
-/// `rgb` (`h × w` RGB8 pixels) in `layout`: itself, or its three planes.
-pub fn arrange(rgb: Vec<u8>, h: usize, w: usize, layout: Layout) -> Vec<u8> {
+/// `rgb` (RGB8 pixels) in `layout`: itself, or its three planes.
+pub fn arrange(rgb: Vec<u8>, layout: Layout) -> Vec<u8> {
     match layout {
         Layout::Hwc => rgb,
         Layout::Chw => {
-            let n = h * w;
-            let mut out = vec![0u8; 3 * n];
-            for (i, p) in rgb.chunks_exact(3).enumerate() {
-                out[i] = p[0];
-                out[n + i] = p[1];
-                out[2 * n + i] = p[2];
-            }
+            let mut out = vec![0u8; rgb.len()];
+            layout.place(&rgb, &mut out);
             out
         }
     }
 }
 
 impl Layout {
+    /// `rgb` (RGB8 pixels) written into `out` (as many bytes) in this
+    /// layout: a copy, or its R, G and B planes one after the other.
+    pub fn place(self, rgb: &[u8], out: &mut [u8]) {
+        match self {
+            Layout::Hwc => out.copy_from_slice(rgb),
+            Layout::Chw => planes(rgb, out),
+        }
+    }
+
     /// The shape of `count` images (or one, for `None`) of `h × w`.
     pub fn shape(self, count: Option<usize>, h: usize, w: usize) -> Vec<usize> {
         let one = match self {

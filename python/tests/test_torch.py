@@ -166,6 +166,31 @@ def test_two_workers_yield_every_pair_exactly_once(six_clips):
     assert tuple(batches[0][0].shape[1:]) == (3, 24, 40)
 
 
+class SharedInWorker(ReynoldsFlowDataset):
+    """Notes in meta whether each tensor was made in shared memory."""
+
+    def __iter__(self):
+        for reps, meta in super().__iter__():
+            yield reps, {**meta, "shared": reps.is_shared()}
+
+
+def test_clips_from_workers_are_made_in_shared_memory(six_clips):
+    root, frames = six_clips
+    got = {}
+    for reps, meta in DataLoader(SharedInWorker(root, per="clip"), batch_size=None, num_workers=2):
+        # Written in place in shared memory: nothing to copy on the way here.
+        assert meta["shared"], meta["source"]
+        got[meta["source"]] = reps.numpy()
+    assert set(got) == set(frames)
+    for source, c in frames.items():
+        assert np.array_equal(got[source], rf.represent_clip(c, layout="chw")), source
+    # Pairs are batched, and the collate copies a batch into shared memory
+    # once: each pair in private memory; in the main process, no worker.
+    pairs = DataLoader(SharedInWorker(root), batch_size=4, num_workers=2)
+    assert not any(any(meta["shared"]) for _, meta in pairs)
+    assert not any(meta["shared"] for _, meta in SharedInWorker(root, per="clip"))
+
+
 def test_ranks_are_disjoint_and_cover_everything(six_clips):
     root, frames = six_clips
     expected = every_pair(frames)

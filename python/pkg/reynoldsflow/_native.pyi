@@ -23,6 +23,9 @@ Size = Union[Tuple[int, int], str]
 # exports __dlpack__ or the array interface (a torch tensor), read in place.
 Frame = npt.NDArray[np.uint8]
 Path = Union[str, PathLike[str]]
+# Where a result is written (out=): a writable, C-contiguous uint8 array of
+# the result's shape, a NumPy array or a CPU torch tensor; returned as given.
+Out = npt.NDArray[np.uint8]
 
 def represent(
     prev: Frame,
@@ -89,6 +92,7 @@ def represent_clip(
     resize: Optional[Size] = None,
     short_side: Optional[int] = None,
     layout: Layout = "hwc",
+    out: Optional[Out] = None,
     engine: Engine = "fixed",
     scale: Scale = "minmax",
     intensity_scale: IntensityScale = ...,
@@ -110,6 +114,7 @@ def represent_clip(
     resize: Optional[Size] = None,
     short_side: Optional[int] = None,
     layout: Layout = "hwc",
+    out: Optional[Out] = None,
     engine: Engine = "fixed",
     scale: Scale = "minmax",
     intensity_scale: IntensityScale = ...,
@@ -129,7 +134,12 @@ def represent_clip(
     takes F frames per second of the clip's rate source_fps (frame
     floor(k * source_fps / F)); resize=(W, H) or short_side=N resizes the
     frames taken, as ``reynoldsflow run --step/--fps/--resize/--short-side``
-    do (docs/resample.md). layout="chw" gives (T - 1, 3, H, W)."""
+    do (docs/resample.md). layout="chw" gives (T - 1, 3, H, W).
+
+    out: a writable, C-contiguous uint8 array (or CPU tensor) of the
+    result's shape to write the images into, returned in place of a new
+    array; a wrong dtype raises TypeError, a wrong shape, strides or a
+    read-only array ValueError."""
 
 class Stream:
     """Frames pushed one at a time (a camera, a decoder): push(frame)
@@ -150,9 +160,11 @@ class Stream:
         hsv_max: Optional[float] = None,
         layout: Layout = "hwc",
     ) -> None: ...
-    def push(self, frame: Frame) -> Optional[npt.NDArray[np.uint8]]:
+    def push(self, frame: Frame, *, out: Optional[Out] = None) -> Optional[npt.NDArray[np.uint8]]:
         """The (height, width, 3) representation of (previous frame, frame),
-        or None for the first frame since the start or reset()."""
+        or None for the first frame since the start or reset(). With out
+        (as represent_clip's), the image is written into it and out
+        returned."""
     def reset(self) -> None:
         """Forget the previous frame: the next push returns None."""
     @property

@@ -19,6 +19,7 @@ of the frames taken (``step``/``fps`` take frames 0, K, 2K, ...).
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
 
@@ -47,6 +48,18 @@ def _threads_here(threads: Optional[int]) -> Optional[int]:
     if threads is None and get_worker_info() is not None:
         return 1
     return threads
+
+
+def _result_tensor(shape: Tuple[int, ...]) -> "torch.Tensor":
+    """An uninitialised uint8 tensor of ``shape`` for a result to be written
+    into. Inside a ``DataLoader`` worker it is in shared memory, as
+    ``default_collate`` makes its batches: sending it to the main process
+    then passes its memory, where a tensor in private memory would first be
+    copied into a new shared segment."""
+    if get_worker_info() is None:
+        return torch.empty(shape, dtype=torch.uint8)
+    storage = torch.UntypedStorage._new_shared(math.prod(shape))
+    return torch.empty(0, dtype=torch.uint8).set_(storage).view(shape)
 
 
 class ReynoldsFlow:
@@ -199,10 +212,12 @@ class ReynoldsFlowDataset(IterableDataset):
             if stream is None:
                 h, w = frame.shape
                 stream = _rf.Stream(w, h, layout="chw", **self.image_options)
-            # A frame of another size raises, as `reynoldsflow run` refuses it.
-            rep = stream.push(frame)
-            if rep is not None:
-                yield torch.from_numpy(rep), {**meta, "frames": (prev, index)}
+                stream.push(frame)
+            else:
+                # A frame of another size raises, as `reynoldsflow run` refuses it.
+                # In private memory: pairs are batched, and default_collate
+                # copies a batch's pairs into shared memory once.
+                yield torch.from_numpy(stream.push(frame)), {**meta, "frames": (prev, index)}
             prev = index
 
     def _clip(self, frames: "_rf.FrameReader", meta: Dict[str, Any]) -> Iterator[Any]:
@@ -211,5 +226,7 @@ class ReynoldsFlowDataset(IterableDataset):
             return
         indices = [i for i, _ in taken]
         clip = numpy.stack([f for _, f in taken])
-        reps = _rf.represent_clip(clip, layout="chw", threads=_threads_here(None), **self.image_options)
-        yield torch.from_numpy(reps), {**meta, "frames": indices}
+        _, h, w = clip.shape
+        reps = _result_tensor((len(taken) - 1, 3, h, w))
+        _rf.represent_clip(clip, layout="chw", threads=_threads_here(None), out=reps, **self.image_options)
+        yield reps, {**meta, "frames": indices}
