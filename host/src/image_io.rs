@@ -16,7 +16,7 @@ use image::{
     DynamicImage, ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageReader,
 };
 
-use crate::{Gray, HostError, ImageProblem, atomic, limits};
+use crate::{Gray, HostError, ImageProblem, atomic, decoder_guard, limits};
 
 /// An RGB8 image, row-major, `3 · width · height` bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -63,10 +63,19 @@ fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
         }
         DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)?
     } else {
-        let decoder = ImageReader::with_format(Cursor::new(bytes), format)
-            .into_decoder()
-            .map_err(decode_error)?;
-        DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)?
+        // PNG and JPEG through their crates, whose panics on malformed
+        // data are refusals too.
+        decoder_guard::guarded(|| {
+            let decoder = ImageReader::with_format(Cursor::new(bytes), format)
+                .into_decoder()
+                .map_err(decode_error)?;
+            DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)
+        })
+        .map_err(|panic| {
+            ImageProblem::Decode(format!(
+                "malformed {format:?} data (the decoder failed: {panic})"
+            ))
+        })??
     };
     match image {
         DynamicImage::ImageLuma8(_)
@@ -210,6 +219,28 @@ mod tests {
             .write_image(data, w, h, color)
             .unwrap();
         out
+    }
+
+    #[test]
+    fn a_jpeg_that_panics_its_decoder_is_refused() {
+        // Found by fuzzing: zune-jpeg 0.5.15 unwraps `None` in its AVX2 IDCT
+        // on this file (on CPUs without AVX2 it may decode or fail plainly).
+        let bytes = include_bytes!("../tests/data/jpeg-decoder-panic.jpg");
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            let Err(ImageProblem::Decode(message)) = decode_gray(bytes) else {
+                panic!("decoded or refused otherwise");
+            };
+            assert!(
+                message.starts_with("malformed Jpeg data (the decoder failed: "),
+                "{message}"
+            );
+        }
+        match decode_gray(bytes) {
+            Ok(gray) => assert_eq!(gray.pixels.len(), gray.width * gray.height),
+            Err(ImageProblem::Decode(_)) => {}
+            Err(other) => panic!("unexpected error: {other}"),
+        }
     }
 
     #[test]

@@ -22,6 +22,7 @@ mod avx2_bytes;
 pub mod captured;
 pub mod cli;
 pub mod compare;
+mod decoder_guard;
 pub mod dispatch;
 mod error;
 pub mod eval;
