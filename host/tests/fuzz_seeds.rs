@@ -230,8 +230,9 @@ fn seeds() -> Seeds {
     seeds
 }
 
-/// The committed corpus is exactly what this file makes; with
-/// `REYNOLDSFLOW_WRITE_SEEDS=1` it (re)writes it.
+/// The committed corpus holds what this file makes (and, beside it,
+/// inputs that once failed a target, kept as they were found); with
+/// `REYNOLDSFLOW_WRITE_SEEDS=1` it (re)writes the generated ones.
 #[test]
 fn the_committed_seed_corpus_is_the_generated_one() {
     let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus");
