@@ -54,23 +54,12 @@ pub trait Sink {
 
     /// The magnitudes of pixels `[x, x + luma.len())` of frame row `y` are
     /// in the rows [`Sink::magnitude_rows`] gave; `luma` is their `fⁿ`.
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
-        let _ = (y, x, luma);
-    }
-
-    /// [`Sink::kept_row`], with the extremes of the two rows, where the
-    /// engine found them as it wrote them (its AVX2 tail): a sink that
-    /// keeps the frame's extremes merges these instead of reading the rows
-    /// again. By default [`Sink::kept_row`].
-    fn kept_row_with_extremes(
-        &mut self,
-        y: usize,
-        x: usize,
-        luma: &[u8],
-        extremes: crate::ExtremesSink,
-    ) {
-        let _ = extremes;
-        self.kept_row(y, x, luma);
+    /// `extremes`: the two rows' extremes, where the engine found them as
+    /// it wrote them (its AVX2 tail), so a sink that keeps the frame's
+    /// extremes merges these instead of reading the rows again; `None`
+    /// where the engine did not.
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<crate::ExtremesSink>) {
+        let _ = (y, x, luma, extremes);
     }
 }
 
@@ -91,19 +80,8 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     }
 
     #[inline(always)]
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
-        (**self).kept_row(y, x, luma)
-    }
-
-    #[inline(always)]
-    fn kept_row_with_extremes(
-        &mut self,
-        y: usize,
-        x: usize,
-        luma: &[u8],
-        extremes: crate::ExtremesSink,
-    ) {
-        (**self).kept_row_with_extremes(y, x, luma, extremes)
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<crate::ExtremesSink>) {
+        (**self).kept_row(y, x, luma, extremes)
     }
 }
 
@@ -745,10 +723,7 @@ impl Pass<'_> {
             if let Some(m) = sink.magnitude_rows(y, x, width) {
                 let extremes = tail_rows.run(&constants, TailOut { m, fields: None });
                 let luma = first(from_first_output(rows.p0.row(o)), width);
-                match extremes {
-                    Some(extremes) => sink.kept_row_with_extremes(y, x, luma, extremes),
-                    None => sink.kept_row(y, x, luma),
-                }
+                sink.kept_row(y, x, luma, extremes);
                 return;
             }
         }

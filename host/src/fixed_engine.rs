@@ -507,18 +507,11 @@ impl Sink for KeptMagnitudes<'_> {
     }
 
     #[inline(always)]
-    fn kept_row_with_extremes(
-        &mut self,
-        _y: usize,
-        _x: usize,
-        _luma: &[u8],
-        extremes: ExtremesSink,
-    ) {
-        self.extremes.merge(extremes);
-    }
-
-    #[inline(always)]
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<ExtremesSink>) {
+        if let Some(extremes) = extremes {
+            self.extremes.merge(extremes);
+            return;
+        }
         let range = self.range(y, x, luma.len());
         let [m_d, m_c] = &self.planes;
         if let (Some(m_d), Some(m_c)) = (m_d.get(range.clone()), m_c.get(range)) {

@@ -115,7 +115,13 @@ impl reynoldsflow_core::Sink for OwnRows {
         Some([&mut self.m_d[at.clone()], &mut self.m_c[at]])
     }
 
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8]) {
+    fn kept_row(
+        &mut self,
+        y: usize,
+        x: usize,
+        luma: &[u8],
+        _: Option<reynoldsflow_core::ExtremesSink>,
+    ) {
         let at = y * self.width + x..y * self.width + x + luma.len();
         self.luma[at].copy_from_slice(luma);
         self.kept += 1;
