@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 mod child_support;
 mod run_support;
 
-use child_support::{Tmpfs, signal, wait_measured};
+use child_support::{Tmpfs, signal, stop, wait_measured};
 use run_support::{BIN, moving_frame, pgm, y4m};
 
 /// Frame size of the test inputs: small enough for a quick reference run,
@@ -227,7 +227,7 @@ fn a_destination_that_vanishes() {
     wait_for_outputs(&mut child, &dst, 5);
     // Stopped while its destination goes, so it cannot finish first on a
     // busy machine, nor create files during the removal.
-    signal(child.id(), libc::SIGSTOP);
+    stop(child.id());
     fs::remove_dir_all(&dst).unwrap();
     signal(child.id(), libc::SIGCONT);
     let (status, err) = finish(child);

@@ -77,6 +77,33 @@ pub fn signal(pid: u32, signal: libc::c_int) {
     assert_eq!(r, 0, "kill: {}", std::io::Error::last_os_error());
 }
 
+/// Stop `pid` (SIGSTOP) and return once every thread of it is stopped:
+/// kill(2) only queues the signal, so a thread on another core may still
+/// finish a syscall (create a file) after it returns.
+pub fn stop(pid: u32) {
+    signal(pid, libc::SIGSTOP);
+    let tasks = format!("/proc/{pid}/task");
+    let stopped = || {
+        std::fs::read_dir(&tasks).unwrap().all(|task| {
+            let stat =
+                std::fs::read_to_string(task.unwrap().path().join("stat")).unwrap_or_default();
+            // The state follows the parenthesised command name.
+            let state = stat
+                .rsplit_once(") ")
+                .and_then(|(_, rest)| rest.bytes().next());
+            matches!(state, Some(b'T' | b't'))
+        })
+    };
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while !stopped() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "pid {pid} did not stop"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+}
+
 /// A tmpfs mounted on a fresh folder for one test, unmounted on drop.
 pub struct Tmpfs {
     pub dir: PathBuf,
