@@ -16,8 +16,8 @@ once, not every epoch), and for each mode:
 - per="pair", batch_size=--batch: the default collate batches pairs in the
   worker, one message a batch (the docs' training example).
 - per="clip", batch_size=None: one (T - 1, 3, H, W) tensor per clip, one
-  message a clip. Its ratio is the figure, printed as
-  dataloader_vs_represent_clip=.
+  message a clip, made in the worker's reused slots (reynoldsflow/_slots.py).
+  Its ratio is the figure, printed as dataloader_vs_represent_clip=.
 
 Each round times one epoch of every mode and one represent_clip call per
 clip, in turn; the medians are printed with their ratio to represent_clip,

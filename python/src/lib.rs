@@ -238,8 +238,8 @@ fn motion_score<'py>(
 /// out= a writable, C-contiguous uint8 array (or CPU tensor) of the
 /// result's shape: the images are written into it, each pair's straight
 /// into its place, and it is returned instead of a new array (a DataLoader
-/// worker hands torch a tensor in shared memory this way, so nothing is
-/// copied on the way to the main process).
+/// worker writes a clip into memory the main process maps this way, so
+/// nothing is copied on the way there).
 #[pyfunction]
 #[pyo3(signature = (frames, **options))]
 fn represent_clip<'py>(

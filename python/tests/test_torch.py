@@ -9,7 +9,7 @@ import torch
 from torch.utils.data import DataLoader
 
 import reynoldsflow as rf
-from reynoldsflow import _native
+from reynoldsflow import _native, _slots
 from reynoldsflow.torch import ReynoldsFlow, ReynoldsFlowDataset, shard_of_this_process
 from conftest import clip, moving_frame, write_pgm, write_y4m
 
@@ -131,6 +131,18 @@ def six_clips(tmp_path_factory):
     return root, frames
 
 
+@pytest.fixture(scope="module")
+def twenty_clips(tmp_path_factory):
+    """Twenty 4-frame Y4M clips of one size."""
+    root = tmp_path_factory.mktemp("twenty")
+    frames = {}
+    for i in range(20):
+        c = np.stack([moving_frame(40, 24, k, seed=i) for k in range(4)])
+        write_y4m(root / f"clip{i:02d}.y4m", c)
+        frames[f"clip{i:02d}.y4m"] = c
+    return root, frames
+
+
 def every_pair(frames: dict, step: int = 1) -> dict:
     """(source, (a, b)) -> representation, channels first, of every pair."""
     out = {}
@@ -166,29 +178,109 @@ def test_two_workers_yield_every_pair_exactly_once(six_clips):
     assert tuple(batches[0][0].shape[1:]) == (3, 24, 40)
 
 
-class SharedInWorker(ReynoldsFlowDataset):
-    """Notes in meta whether each tensor was made in shared memory."""
+class SlotInWorker(ReynoldsFlowDataset):
+    """Notes in meta whether each tensor was made in a worker's slot."""
 
     def __iter__(self):
         for reps, meta in super().__iter__():
-            yield reps, {**meta, "shared": reps.is_shared()}
+            yield reps, {**meta, "slot": isinstance(reps, _slots.SlotTensor)}
 
 
-def test_clips_from_workers_are_made_in_shared_memory(six_clips):
-    root, frames = six_clips
+def test_clips_from_workers_travel_in_reused_slots(twenty_clips):
+    root, frames = twenty_clips
+    before = set(_slots._received.slots)
     got = {}
-    for reps, meta in DataLoader(SharedInWorker(root, per="clip"), batch_size=None, num_workers=2):
-        # Written in place in shared memory: nothing to copy on the way here.
-        assert meta["shared"], meta["source"]
-        got[meta["source"]] = reps.numpy()
+    loader = DataLoader(SlotInWorker(root, per="clip"), batch_size=None, num_workers=2)
+    for reps, meta in loader:
+        # Made in a slot in the worker; here a plain tensor over its mapping.
+        assert meta["slot"] and type(reps) is torch.Tensor, meta["source"]
+        got[meta["source"]] = reps.numpy().copy()
+        del reps
     assert set(got) == set(frames)
     for source, c in frames.items():
         assert np.array_equal(got[source], rf.represent_clip(c, layout="chw")), source
-    # Pairs are batched, and the collate copies a batch into shared memory
-    # once: each pair in private memory; in the main process, no worker.
-    pairs = DataLoader(SharedInWorker(root), batch_size=4, num_workers=2)
-    assert not any(any(meta["shared"]) for _, meta in pairs)
-    assert not any(meta["shared"] for _, meta in SharedInWorker(root, per="clip"))
+    # Each clip let go before the next: a few slots a worker carried all 20.
+    used = set(_slots._received.slots) - before
+    assert 2 <= len(used) <= 2 * 4, used
+    # Pairs are batched by the collate, which makes its own shared memory;
+    # in the main process (no worker) a clip is a plain tensor.
+    assert not any(any(meta["slot"]) for _, meta in DataLoader(SlotInWorker(root), batch_size=4, num_workers=2))
+    assert not any(meta["slot"] for _, meta in SlotInWorker(root, per="clip"))
+
+
+class SendsTwice(ReynoldsFlowDataset):
+    """Worker code that sends each clip twice, then a view of it that torch
+    sends its own way."""
+
+    def __iter__(self):
+        for reps, meta in super().__iter__():
+            yield reps, meta
+            yield reps, meta
+            yield reps[1:], {**meta, "view": True}
+
+
+class KeepsInWorker(ReynoldsFlowDataset):
+    """Worker code that keeps every clip it sends, and at the end says
+    whether they are as they were sent."""
+
+    def __iter__(self):
+        kept = []
+        for reps, meta in super().__iter__():
+            kept.append((reps, reps.clone()))
+            yield reps, meta
+        yield torch.zeros(0), {"intact": all(torch.equal(a, b) for a, b in kept), "count": len(kept)}
+
+
+def test_no_slot_is_written_while_either_side_holds_it(twenty_clips):
+    root, frames = twenty_clips
+    expected = {s: rf.represent_clip(c, layout="chw") for s, c in frames.items()}
+    # The main process holds every clip: no slot comes back, the pool fills
+    # and further clips go through torch's shared memory; none changes.
+    held = [(meta["source"], reps) for reps, meta in
+            DataLoader(ReynoldsFlowDataset(root, per="clip"), batch_size=None, num_workers=2)]
+    assert len(held) == len(frames)
+    for source, reps in held:
+        assert np.array_equal(reps.numpy(), expected[source]), source
+    # A clip sent twice stays whole while one copy of it is held; a view
+    # that torch sends is copied, not aliased.
+    keep = []
+    for reps, meta in DataLoader(SendsTwice(root, per="clip"), batch_size=None, num_workers=2):
+        keep.append((meta, reps if meta.get("view") or len(keep) % 3 == 1 else None))
+    assert len(keep) == 3 * len(frames)
+    for meta, reps in keep:
+        if reps is not None:
+            want = expected[meta["source"]]
+            assert np.array_equal(reps.numpy(), want[1:] if meta.get("view") else want), meta["source"]
+    # Clips kept in the worker keep their slots there, though the main
+    # process lets go of each at once.
+    ends = [meta for _, meta in DataLoader(KeepsInWorker(root, per="clip"), batch_size=None, num_workers=2)
+            if "intact" in meta]
+    assert [e["intact"] for e in ends] == [True, True] and sum(e["count"] for e in ends) == len(frames)
+
+
+def test_epochs_of_new_workers_do_not_pile_up_slots(twenty_clips):
+    root, frames = twenty_clips
+    loader = DataLoader(ReynoldsFlowDataset(root, per="clip"), batch_size=None, num_workers=2)
+    for _ in range(4):
+        assert sum(1 for _ in loader) == len(frames)
+    # The pools of exited workers are forgotten when new ones arrive.
+    assert len(_slots._received.slots) <= 2 * _slots.MAX_SLOTS
+
+
+def test_clips_of_ever_larger_sizes_replace_slots(tmp_path):
+    expected = {}
+    for i in range(12):
+        c = np.stack([moving_frame(16 + 8 * i, 12, k, seed=i) for k in range(3)])
+        write_y4m(tmp_path / f"clip{i:02d}.y4m", c)
+        expected[f"clip{i:02d}.y4m"] = rf.represent_clip(c, layout="chw")
+    before = set(_slots._received.slots)
+    loader = DataLoader(ReynoldsFlowDataset(tmp_path, per="clip"), batch_size=None, num_workers=1,
+                        persistent_workers=True)
+    for reps, meta in loader:
+        assert np.array_equal(reps.numpy(), expected[meta["source"]]), meta["source"]
+    # No smaller slot fits a larger clip: the worker drops idle slots to
+    # make new ones, and the main process forgets what it dropped.
+    assert len(set(_slots._received.slots) - before) <= _slots.MAX_SLOTS
 
 
 def test_ranks_are_disjoint_and_cover_everything(six_clips):

@@ -35,6 +35,7 @@ except ImportError as e:  # pragma: no cover - exercised without torch only
 import numpy
 
 import reynoldsflow as _rf
+from reynoldsflow import _slots
 
 __all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "shard_of_this_process"]
 
@@ -52,12 +53,16 @@ def _threads_here(threads: Optional[int]) -> Optional[int]:
 
 def _result_tensor(shape: Tuple[int, ...]) -> "torch.Tensor":
     """An uninitialised uint8 tensor of ``shape`` for a result to be written
-    into. Inside a ``DataLoader`` worker it is in shared memory, as
-    ``default_collate`` makes its batches: sending it to the main process
-    then passes its memory, where a tensor in private memory would first be
-    copied into a new shared segment."""
+    into. Inside a ``DataLoader`` worker it is in one of the worker's slots
+    (``reynoldsflow._slots``), which the main process keeps mapped; when
+    every slot is in use, in torch's shared memory, as ``default_collate``
+    makes its batches (sending it then passes its memory, where a tensor in
+    private memory would first be copied into a new shared segment)."""
     if get_worker_info() is None:
         return torch.empty(shape, dtype=torch.uint8)
+    reps = _slots.clip_tensor(shape)
+    if reps is not None:
+        return reps
     storage = torch.UntypedStorage._new_shared(math.prod(shape))
     return torch.empty(0, dtype=torch.uint8).set_(storage).view(shape)
 
