@@ -14,7 +14,10 @@ once, not every epoch), and for each mode:
   torch's transport costs about a millisecond of the main process per
   message, which caps this row near 1000 pairs/s whatever the dataset does.
 - per="pair", batch_size=--batch: the default collate batches pairs in the
-  worker, one message a batch (the docs' training example).
+  worker, one message a batch.
+- per="pair", batch_size=--batch, collate_fn=reynoldsflow.torch.collate:
+  the batches stacked in the worker's reused slots (the docs' training
+  example).
 - per="clip", batch_size=None: one (T - 1, 3, H, W) tensor per clip, one
   message a clip, made in the worker's reused slots (reynoldsflow/_slots.py).
   Its ratio is the figure, printed as dataloader_vs_represent_clip=.
@@ -43,7 +46,7 @@ from pathlib import Path
 from torch.utils.data import DataLoader
 
 import reynoldsflow as rf
-from reynoldsflow.torch import ReynoldsFlowDataset
+from reynoldsflow.torch import ReynoldsFlowDataset, collate
 # The moving texture of the other bench (this folder is on sys.path when
 # a bench runs as a script).
 from throughput import moving_clip
@@ -86,13 +89,14 @@ def main() -> int:
         for i, c in enumerate(clips):
             write_y4m(root / f"clip{i:04d}.y4m", c)
 
-        def loader(per: str, batch_size):
+        def loader(per: str, batch_size, **kw):
             return DataLoader(ReynoldsFlowDataset(root, per=per), batch_size=batch_size,
-                              num_workers=args.workers, persistent_workers=True)
+                              num_workers=args.workers, persistent_workers=True, **kw)
 
         modes = {
             'per="pair", batch_size=None': loader("pair", None),
             f'per="pair", batch_size={args.batch}': loader("pair", args.batch),
+            f'per="pair", batch_size={args.batch}, collate_fn=collate': loader("pair", args.batch, collate_fn=collate),
             'per="clip", batch_size=None': loader("clip", None),
         }
 

@@ -10,7 +10,7 @@ from torch.utils.data import DataLoader
 
 import reynoldsflow as rf
 from reynoldsflow import _native, _slots
-from reynoldsflow.torch import ReynoldsFlow, ReynoldsFlowDataset, shard_of_this_process
+from reynoldsflow.torch import ReynoldsFlow, ReynoldsFlowDataset, collate, shard_of_this_process
 from conftest import clip, moving_frame, write_pgm, write_y4m
 
 
@@ -281,6 +281,35 @@ def test_clips_of_ever_larger_sizes_replace_slots(tmp_path):
     # No smaller slot fits a larger clip: the worker drops idle slots to
     # make new ones, and the main process forgets what it dropped.
     assert len(set(_slots._received.slots) - before) <= _slots.MAX_SLOTS
+
+
+def test_collate_gives_default_collates_batches_stacked_in_slots(twenty_clips):
+    root, _ = twenty_clips
+
+    def batches(**kw):
+        return list(DataLoader(ReynoldsFlowDataset(root), batch_size=8, num_workers=2, **kw))
+
+    ours, theirs = batches(collate_fn=collate), batches()
+    assert len(ours) == len(theirs) and sum(len(reps) for reps, _ in ours) == 20 * 3
+    for (reps, meta), (want, want_meta) in zip(ours, theirs):
+        assert type(reps) is torch.Tensor and reps.dtype == torch.uint8
+        assert torch.equal(reps, want)
+        assert meta["source"] == want_meta["source"] and meta["path"] == want_meta["path"]
+        assert all(torch.equal(a, b) for a, b in zip(meta["frames"], want_meta["frames"]))
+    # In a worker the batch is made in a slot; in the main process (no
+    # worker) it is default_collate's.
+    assert next(iter(DataLoader(CollatedInSlot(root), batch_size=None, num_workers=1)))
+    pairs = list(ReynoldsFlowDataset(root, max_frames=3))[:4]
+    assert type(collate(pairs)[0]) is torch.Tensor
+    assert torch.equal(collate(pairs)[0], torch.stack([rep for rep, _ in pairs]))
+
+
+class CollatedInSlot(ReynoldsFlowDataset):
+    """Yields whether `collate` stacked a batch in a slot, in the worker."""
+
+    def __iter__(self):
+        pairs = list(super().__iter__())[:4]
+        yield isinstance(collate(pairs)[0], _slots.SlotTensor)
 
 
 def test_ranks_are_disjoint_and_cover_everything(six_clips):

@@ -25,7 +25,7 @@ from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
 
 try:
     import torch
-    from torch.utils.data import IterableDataset, get_worker_info
+    from torch.utils.data import IterableDataset, default_collate, get_worker_info
 except ImportError as e:  # pragma: no cover - exercised without torch only
     raise ImportError(
         "reynoldsflow.torch needs PyTorch (pip install torch); "
@@ -37,7 +37,7 @@ import numpy
 import reynoldsflow as _rf
 from reynoldsflow import _slots
 
-__all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "shard_of_this_process"]
+__all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "collate", "shard_of_this_process"]
 
 # The keywords of the frames taken (read_frames / represent_clip).
 _FRAME_KEYS = ("step", "fps", "resize", "short_side")
@@ -109,6 +109,21 @@ class ReynoldsFlow:
     def __repr__(self) -> str:
         options = ", ".join(f"{k}={v!r}" for k, v in sorted(self.options.items()))
         return f"ReynoldsFlow({options})"
+
+
+def collate(batch: Sequence[Tuple["torch.Tensor", Dict[str, Any]]]) -> Any:
+    """A ``DataLoader`` ``collate_fn`` for batches of ``(rep, meta)`` pairs:
+    what ``default_collate`` gives (the images stacked, ``(B, 3, H, W)``,
+    and the metas collated), with the images stacked in one of the worker's
+    reused slots (``reynoldsflow._slots``) rather than in new shared memory
+    each batch: ``DataLoader(dataset, batch_size=32, collate_fn=collate)``."""
+    reps = [rep for rep, _ in batch]
+    if reps and all(r.shape == reps[0].shape and r.dtype == torch.uint8 for r in reps):
+        out = _result_tensor((len(reps),) + tuple(reps[0].shape))
+        if isinstance(out, _slots.SlotTensor):
+            torch.stack(reps, out=out)
+            return [out, default_collate([meta for _, meta in batch])]
+    return default_collate(batch)
 
 
 def shard_of_this_process(
