@@ -12,6 +12,7 @@ use std::sync::Mutex;
 
 use numpy::ndarray::Axis;
 use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArray};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -537,7 +538,8 @@ fn convert<'py>(
 ///
 /// The items `reynoldsflow dataset SRC DST` would make, in its order: (the
 /// video or frame folder, its output folder relative to DST). With
-/// files_from, those of that manifest (one path relative to src per line);
+/// files_from, those of that manifest (one path relative to src per line),
+/// or of that list of paths (each relative to src, or absolute inside it);
 /// with dst inside src, dst is not searched. With shard=(i, n), only those
 /// `reynoldsflow dataset --shard i/n` takes (the same hash of each item's
 /// path relative to src, computed by the same code).
@@ -546,7 +548,7 @@ fn convert<'py>(
 fn dataset_items(
     py: Python<'_>,
     src: std::path::PathBuf,
-    files_from: Option<std::path::PathBuf>,
+    files_from: Option<&Bound<'_, PyAny>>,
     dst: Option<std::path::PathBuf>,
     shard: Option<(u64, u64)>,
 ) -> PyResult<Vec<(String, String)>> {
@@ -556,10 +558,19 @@ fn dataset_items(
             value_error(format!("dataset_items(): shard = ({index}, {count}): {e}"))
         })?,
     };
+    let files_from = files_from.map(FilesFrom::extract).transpose()?;
     let items = py
         .detach(|| {
             guarded(|| match &files_from {
-                Some(list) => dataset::manifest(&src, list),
+                Some(FilesFrom::Manifest(list)) => dataset::manifest(&src, list),
+                Some(FilesFrom::Paths(paths)) => dataset::listed(
+                    &src,
+                    std::path::Path::new("files_from"),
+                    paths
+                        .iter()
+                        .enumerate()
+                        .map(|(n, p)| (format!("item {n}"), p.as_path())),
+                ),
                 None => {
                     let skip = dst.and_then(|d| std::fs::canonicalize(d).ok());
                     dataset::discover(&src, skip.as_deref())
@@ -572,6 +583,29 @@ fn dataset_items(
         .filter(|i| shard.contains(&dataset::shard_key(&src, i)))
         .map(|i| (i.src.display().to_string(), i.rel.display().to_string()))
         .collect())
+}
+
+/// `files_from=`: a manifest's path, or the paths themselves.
+enum FilesFrom {
+    Manifest(std::path::PathBuf),
+    Paths(Vec<std::path::PathBuf>),
+}
+
+impl FilesFrom {
+    fn extract(value: &Bound<'_, PyAny>) -> PyResult<Self> {
+        if let Ok(path) = value.extract() {
+            return Ok(Self::Manifest(path));
+        }
+        value.extract().map(Self::Paths).map_err(|_| {
+            PyTypeError::new_err(format!(
+                "dataset_items(): files_from must be a manifest's path or a list of paths, not {}",
+                value
+                    .get_type()
+                    .name()
+                    .map_or_else(|_| "?".into(), |n| n.to_string())
+            ))
+        })
+    }
 }
 
 /// read_frames(path, *, step=None, fps=None, resize=None, short_side=None,

@@ -9,6 +9,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import reynoldsflow as rf
 from conftest import clip, run_cli, tree, write_pgm, write_y4m
@@ -76,6 +77,18 @@ def test_dataset_items_follow_a_manifest(tmp_path):
     assert [rel for _, rel in items] == ["a/short", "missing", "seq1"]
     r = rf.convert(items[1][0], tmp_path / "out" / "missing")
     assert r["status"] == "failed" and "missing.y4m" in r["error"]
+    # Or the paths themselves: relative, absolute inside src, PathLike.
+    listed = rf.dataset_items(src, files_from=["seq1", str(src / "a" / "short.y4m"), Path("missing.y4m")])
+    assert listed == items
+    for shard in range(3):
+        assert (rf.dataset_items(src, files_from=["seq1", "a/short.y4m", "missing.y4m"], shard=(shard, 3))
+                == rf.dataset_items(src, files_from=manifest, shard=(shard, 3)))
+    with pytest.raises(ValueError, match=r"item 1: \.\./elsewhere.y4m: expected a path inside SRC"):
+        rf.dataset_items(src, files_from=["seq1", "../elsewhere.y4m"])
+    with pytest.raises(ValueError, match="not inside SRC"):
+        rf.dataset_items(src, files_from=[str(tmp_path / "elsewhere.y4m")])
+    with pytest.raises(TypeError, match="a manifest's path or a list of paths, not int"):
+        rf.dataset_items(src, files_from=3)
 
 
 def test_ray_recipe_outputs_equal_the_cli_dataset(cli, tmp_path):

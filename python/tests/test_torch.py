@@ -344,6 +344,19 @@ def test_clips_step_and_resize_match_represent_clip(six_clips):
     assert set(pairs) == set(every_pair(frames, step=2))
 
 
+def test_a_list_of_paths_is_a_source(six_clips):
+    root, frames = six_clips
+    some = sorted(frames)[::2]
+    got = {meta["source"]: reps.numpy()
+           for reps, meta in ReynoldsFlowDataset(root, files_from=[root / s for s in some], per="clip")}
+    assert sorted(got) == some
+    for source in some:
+        assert np.array_equal(got[source], rf.represent_clip(frames[source], layout="chw")), source
+    # Workers split the list by the same hash as a manifest of it.
+    loader = DataLoader(ReynoldsFlowDataset(root, files_from=some), batch_size=None, num_workers=2)
+    assert sorted({k[0] for k, _ in collect(loader)}) == some
+
+
 def test_shards_and_bad_options():
     assert shard_of_this_process() == (0, 1)
     assert shard_of_this_process(3, 4) == (3, 4)

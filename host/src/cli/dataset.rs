@@ -218,15 +218,33 @@ fn walk(
 }
 
 /// The items listed in `list` (`-`: stdin), one path relative to `src` per
-/// line (or absolute, inside `src`), sorted by output path like
-/// [`discover`]'s. A folder is a frame folder, anything else a video; a
-/// path that does not exist becomes an item that fails when it is opened.
+/// line (or absolute, inside `src`); blank lines and lines starting with
+/// `#` are skipped. See [`listed`].
 pub fn manifest(src: &Path, list: &Path) -> Result<Vec<Item>, HostError> {
     let text = if list.as_os_str() == "-" {
         std::io::read_to_string(std::io::stdin()).map_err(|e| HostError::io("stdin", e))?
     } else {
         fs::read_to_string(list).map_err(|e| HostError::io(list, e))?
     };
+    let lines = text
+        .lines()
+        .map(|line| line.trim_end_matches('\r'))
+        .enumerate()
+        .filter(|(_, line)| !line.trim().is_empty() && !line.starts_with('#'))
+        .map(|(n, line)| (format!("line {}", n + 1), Path::new(line)));
+    listed(src, list, lines)
+}
+
+/// The items of `paths` (each with the label its problems name, and
+/// relative to `src` or absolute inside it), sorted by output path like
+/// [`discover`]'s; `origin` is where the list came from. A folder is a
+/// frame folder, anything else a video; a path that does not exist becomes
+/// an item that fails when it is opened.
+pub fn listed<'a>(
+    src: &Path,
+    origin: &Path,
+    paths: impl IntoIterator<Item = (String, &'a Path)>,
+) -> Result<Vec<Item>, HostError> {
     if !src.is_dir() {
         return Err(input_error(
             src,
@@ -234,17 +252,12 @@ pub fn manifest(src: &Path, list: &Path) -> Result<Vec<Item>, HostError> {
         ));
     }
     let mut items = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.trim_end_matches('\r');
-        if line.trim().is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let at_line =
-            |problem: &str| input_error(list, format!("line {}: {line}: {problem}", n + 1));
-        let path = Path::new(line);
+    for (label, path) in paths {
+        let problem =
+            |problem: &str| input_error(origin, format!("{label}: {}: {problem}", path.display()));
         let rel = if path.is_absolute() {
             path.strip_prefix(src)
-                .map_err(|_| at_line("not inside SRC"))?
+                .map_err(|_| problem("not inside SRC"))?
         } else {
             path
         };
@@ -257,7 +270,7 @@ pub fn manifest(src: &Path, list: &Path) -> Result<Vec<Item>, HostError> {
                 .components()
                 .any(|c| !matches!(c, std::path::Component::Normal(_)))
         {
-            return Err(at_line("expected a path inside SRC (no '..')"));
+            return Err(problem("expected a path inside SRC (no '..')"));
         }
         let full = src.join(&rel);
         let frames = full.is_dir();

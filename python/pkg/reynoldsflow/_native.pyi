@@ -224,13 +224,14 @@ def convert(
 def dataset_items(
     src: Path,
     *,
-    files_from: Optional[Path] = None,
+    files_from: Union[None, Path, Sequence[Path]] = None,
     dst: Optional[Path] = None,
     shard: Optional[Tuple[int, int]] = None,
 ) -> list[Tuple[str, str]]:
     """The items ``reynoldsflow dataset SRC DST`` makes, in its order:
     (video file or frame folder, its output folder relative to DST). With
-    files_from, those of that manifest (one path relative to src per line);
+    files_from, those of that manifest (one path relative to src per line)
+    or of that list of paths (each relative to src, or absolute inside it);
     a dst inside src is not searched. With shard=(i, n), only the items
     ``reynoldsflow dataset --shard i/n`` takes (the same hash)."""
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 try:
     import torch
@@ -63,8 +63,12 @@ def _result_tensor(shape: Tuple[int, ...]) -> "torch.Tensor":
     reps = _slots.clip_tensor(shape)
     if reps is not None:
         return reps
-    storage = torch.UntypedStorage._new_shared(math.prod(shape))
-    return torch.empty(0, dtype=torch.uint8).set_(storage).view(shape)
+    # A private method of torch's (default_collate's way to shared memory):
+    # where a torch lacks it, private memory, which torch copies to send.
+    new_shared = getattr(torch.UntypedStorage, "_new_shared", None)
+    if new_shared is None:
+        return torch.empty(shape, dtype=torch.uint8)
+    return torch.empty(0, dtype=torch.uint8).set_(new_shared(math.prod(shape))).view(shape)
 
 
 class ReynoldsFlow:
@@ -152,7 +156,8 @@ def shard_of_this_process(
 class ReynoldsFlowDataset(IterableDataset):
     """The representations of the videos and frame folders under ``src``
     (a folder tree, one video or one frame folder; with ``files_from``, the
-    items that manifest lists, one path relative to ``src`` per line), read
+    items that manifest lists, one path relative to ``src`` per line, or the
+    items of a list of paths, each relative to ``src`` or inside it), read
     in the order and with the frames of ``reynoldsflow dataset SRC``.
 
     ``per="pair"`` (default) yields ``(rep, meta)`` for each pair: ``rep``
@@ -181,7 +186,7 @@ class ReynoldsFlowDataset(IterableDataset):
         self,
         src: Union[str, "os.PathLike[str]"],
         *,
-        files_from: Union[None, str, "os.PathLike[str]"] = None,
+        files_from: Union[None, str, "os.PathLike[str]", Sequence[Union[str, "os.PathLike[str]"]]] = None,
         per: str = "pair",
         rank: Optional[int] = None,
         world_size: Optional[int] = None,
@@ -196,7 +201,11 @@ class ReynoldsFlowDataset(IterableDataset):
         if (rank is None) != (world_size is None):
             raise ValueError("give rank and world_size together, or neither")
         self.src = os.fspath(src)
-        self.files_from = None if files_from is None else os.fspath(files_from)
+        self.files_from: Union[None, str, List[str]] = (
+            None if files_from is None
+            else os.fspath(files_from) if isinstance(files_from, (str, os.PathLike))
+            else [os.fspath(p) for p in files_from]
+        )
         self.per = per
         self.rank, self.world_size = rank, world_size
         self.frame_options: Dict[str, Any] = {k: options.pop(k) for k in _FRAME_KEYS if k in options}
