@@ -10,9 +10,9 @@ settings. The DataLoader runs as a training loop runs it, the way
 docs/python.md shows: --workers workers, persistent_workers=True (started
 once, not every epoch), and for each mode:
 
-- per="pair", batch_size=None: one message to the main process per pair;
-  torch's transport costs about a millisecond of the main process per
-  message, which caps this row near 1000 pairs/s whatever the dataset does.
+- per="pair", batch_size=None: one message to the main process per pair,
+  most by slot; torch still spends about half a millisecond of CPU on each
+  message.
 - per="pair", batch_size=--batch: the default collate batches pairs in the
   worker, one message a batch.
 - per="pair", batch_size=--batch, collate_fn=reynoldsflow.torch.collate:

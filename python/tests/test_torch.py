@@ -202,9 +202,14 @@ def test_clips_from_workers_travel_in_reused_slots(twenty_clips):
     # Each clip let go before the next: a few slots a worker carried all 20.
     used = set(_slots._received.slots) - before
     assert 2 <= len(used) <= 2 * 4, used
-    # Pairs are batched by the collate, which makes its own shared memory;
-    # in the main process (no worker) a clip is a plain tensor.
-    assert not any(any(meta["slot"]) for _, meta in DataLoader(SlotInWorker(root), batch_size=4, num_workers=2))
+    # Pairs too, a few slots at a time (the others in private memory); in
+    # the main process (no worker) a clip is a plain tensor.
+    pairs = [(meta, rep.numpy().copy()) for rep, meta in
+             DataLoader(SlotInWorker(root), batch_size=None, num_workers=2)]
+    assert len(pairs) == 20 * 3 and any(meta["slot"] for meta, _ in pairs)
+    for meta, rep in pairs:
+        a, b = meta["frames"]
+        assert np.array_equal(rep, got[meta["source"]][a]), meta
     assert not any(meta["slot"] for _, meta in SlotInWorker(root, per="clip"))
 
 

@@ -50,6 +50,9 @@ __all__ = ["SlotTensor", "clip_tensor", "slots_received"]
 # Slots a worker keeps; the main process holds at most this many of one
 # worker's clips without falling back to torch's shared memory.
 MAX_SLOTS = 8
+# Of them, how many may hold single pairs: a batch of pairs is collated
+# while its pairs still hold theirs, and needs a slot of its own.
+PAIR_SLOTS = MAX_SLOTS // 2
 # Bytes after the data: the control word, 8-byte aligned.
 _CONTROL = 8
 
@@ -99,11 +102,13 @@ class _Pool:
         # Slots dropped since the last message: the next tells the main process.
         self.dropped: List[int] = []
 
-    def take(self, shape: Tuple[int, ...]) -> Optional[SlotTensor]:
+    def take(self, shape: Tuple[int, ...], limit: int) -> Optional[SlotTensor]:
         nbytes = math.prod(shape)
         free = [s for s in self.slots if s.free_for(nbytes)]
         if free:
             slot = min(free, key=lambda s: s.capacity)
+        elif sum(1 for s in self.slots if nbytes <= s.capacity <= 2 * nbytes) >= limit:
+            return None
         else:
             if len(self.slots) >= MAX_SLOTS:
                 # Make room by dropping a slot of another size nobody uses.
@@ -138,16 +143,17 @@ def _this_pool() -> Optional[_Pool]:
     return _pool if _pool is not None and _pool.pid == os.getpid() else None
 
 
-def clip_tensor(shape: Tuple[int, ...]) -> Optional[SlotTensor]:
+def clip_tensor(shape: Tuple[int, ...], limit: int = MAX_SLOTS) -> Optional[SlotTensor]:
     """An uninitialised uint8 tensor of ``shape`` in one of this worker's
-    slots, or None (no ``memfd`` here, or every slot in use)."""
+    slots, or None (no ``memfd`` here, or every slot in use, or ``limit``
+    slots of its size are)."""
     global _pool
     if not hasattr(os, "memfd_create"):
         return None
     if _this_pool() is None:
         _pool = _Pool()
     assert _pool is not None
-    return _pool.take(shape)
+    return _pool.take(shape, limit)
 
 
 def _reduce_slot_tensor(t: SlotTensor):

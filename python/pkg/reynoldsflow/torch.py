@@ -237,6 +237,7 @@ class ReynoldsFlowDataset(IterableDataset):
 
     def _pairs(self, frames: "_rf.FrameReader", meta: Dict[str, Any]) -> Iterator[Any]:
         stream, prev = None, None
+        in_worker = get_worker_info() is not None
         for index, frame in frames:
             if stream is None:
                 h, w = frame.shape
@@ -244,9 +245,15 @@ class ReynoldsFlowDataset(IterableDataset):
                 stream.push(frame)
             else:
                 # A frame of another size raises, as `reynoldsflow run` refuses it.
-                # In private memory: pairs are batched, and default_collate
-                # copies a batch's pairs into shared memory once.
-                yield torch.from_numpy(stream.push(frame)), {**meta, "frames": (prev, index)}
+                # In a worker, a few pairs at a time in slots (an unbatched
+                # pair goes to the main process by slot); the others in
+                # private memory, which a collate copies into its batch.
+                rep = _slots.clip_tensor((3, h, w), _slots.PAIR_SLOTS) if in_worker else None
+                if rep is None:
+                    rep = torch.from_numpy(stream.push(frame))
+                else:
+                    stream.push(frame, out=rep)
+                yield rep, {**meta, "frames": (prev, index)}
             prev = index
 
     def _clip(self, frames: "_rf.FrameReader", meta: Dict[str, Any]) -> Iterator[Any]:
