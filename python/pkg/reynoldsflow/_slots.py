@@ -33,13 +33,14 @@ tensor of its own still points there.
 from __future__ import annotations
 
 import math
+import collections
 import mmap
 import os
 import threading
 import uuid
 import weakref
 from multiprocessing.reduction import DupFd, ForkingPickler
-from typing import Dict, List, Optional, Tuple
+from typing import Deque, Dict, List, Optional, Tuple
 
 import numpy
 import torch
@@ -85,9 +86,13 @@ class _Slot:
     def _unused_here(self) -> None:
         self.in_worker = False
 
-    def free_for(self, nbytes: int) -> bool:
-        return (not self.in_worker and int(self.released[0]) == self.sent
-                and nbytes <= self.capacity <= 2 * nbytes)
+    def idle(self) -> bool:
+        """Neither process holds a tensor over it."""
+        return not self.in_worker and int(self.released[0]) == self.sent
+
+    def fits(self, nbytes: int) -> bool:
+        """Big enough for ``nbytes``, and not more than twice as big."""
+        return nbytes <= self.capacity <= 2 * nbytes
 
 
 class _Pool:
@@ -99,20 +104,21 @@ class _Pool:
         self.slots: List[_Slot] = []
         self.numbers = 0
         self.by_address: Dict[int, _Slot] = {}
-        # Slots dropped since the last message: the next tells the main process.
-        self.dropped: List[int] = []
+        # Slots dropped since the last message: the next tells the main
+        # process (a deque: the feeder thread takes what this one adds).
+        self.dropped: Deque[int] = collections.deque()
 
     def take(self, shape: Tuple[int, ...], limit: int) -> Optional[SlotTensor]:
         nbytes = math.prod(shape)
-        free = [s for s in self.slots if s.free_for(nbytes)]
+        free = [s for s in self.slots if s.fits(nbytes) and s.idle()]
         if free:
             slot = min(free, key=lambda s: s.capacity)
-        elif sum(1 for s in self.slots if nbytes <= s.capacity <= 2 * nbytes) >= limit:
+        elif sum(1 for s in self.slots if s.fits(nbytes)) >= limit:
             return None
         else:
             if len(self.slots) >= MAX_SLOTS:
                 # Make room by dropping a slot of another size nobody uses.
-                idle = [s for s in self.slots if not s.in_worker and int(s.released[0]) == s.sent]
+                idle = [s for s in self.slots if s.idle()]
                 if not idle:
                     return None
                 self._drop(idle[0])
@@ -166,7 +172,7 @@ def _reduce_slot_tensor(t: SlotTensor):
         return reduce_tensor(t.as_subclass(torch.Tensor))
     fd = DupFd(slot.fd) if slot.sent == 0 else None
     slot.sent += 1
-    dropped, pool.dropped = tuple(pool.dropped), []
+    dropped = tuple(pool.dropped.popleft() for _ in range(len(pool.dropped)))
     head = (pool.id, pool.pid, slot.number, slot.capacity, slot.sent, dropped)
     return (_rebuild, (head, fd, tuple(t.shape)))
 
