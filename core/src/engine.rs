@@ -351,30 +351,28 @@ struct Rows<'m> {
     d: RowRing<'m, i16, D_DEPTH>,
     vert_d: [&'m mut [i16]; 4],
     p0: RowRing<'m, u8, P0_DEPTH>,
-    /// The AVX2 kernels, with the sums' rings in blocks, or `None`.
-    #[cfg(target_arch = "x86_64")]
-    avx2: Option<crate::Avx2>,
 }
 
 /// The ring of one kind of structure sums (`K` channels): a ring per
-/// channel, or with the AVX2 kernels one ring whose rows hold all `K`
-/// channels in blocks (`avx2`; the same memory).
+/// channel, or with the AVX2 kernels (their token beside it) one ring whose
+/// rows hold all `K` channels in blocks (`avx2`; the same memory).
 enum SumRing<'m, T, const K: usize> {
     Planar([RowRing<'m, T, SUM_DEPTH>; K]),
     /// The ring's memory, `SUM_DEPTH · K · cols` values (`avx2`'s layout).
     #[cfg(target_arch = "x86_64")]
-    Blocked(&'m mut [T]),
+    Blocked(crate::Avx2, &'m mut [T]),
 }
 
 impl<'m, T, const K: usize> SumRing<'m, T, K> {
-    /// The ring(s) of rows of `cols` values per channel.
+    /// The ring(s) of rows of `cols` values per channel, blocked where the
+    /// job runs the AVX2 kernels.
     #[inline(always)]
-    fn carve(memory: &mut &'m mut [T], cols: usize, blocked: bool) -> Self {
+    fn carve(memory: &mut &'m mut [T], cols: usize, kernels: Kernels) -> Self {
         #[cfg(target_arch = "x86_64")]
-        if blocked {
-            return Self::Blocked(crate::ring::take(memory, SUM_DEPTH * K * cols));
+        if let Some(avx2) = kernels.avx2 {
+            return Self::Blocked(avx2, crate::ring::take(memory, SUM_DEPTH * K * cols));
         }
-        let _ = blocked;
+        let _ = kernels;
         Self::Planar(core::array::from_fn(|_| RowRing::carve(memory, cols)))
     }
 
@@ -384,7 +382,7 @@ impl<'m, T, const K: usize> SumRing<'m, T, K> {
         match self {
             Self::Planar(rings) => SumRow::Planar(rings.each_mut().map(|ring| ring.row_mut(t))),
             #[cfg(target_arch = "x86_64")]
-            Self::Blocked(ring) => SumRow::Blocked(ring, t % SUM_DEPTH),
+            Self::Blocked(avx2, ring) => SumRow::Blocked(*avx2, ring, t % SUM_DEPTH),
         }
     }
 }
@@ -403,18 +401,17 @@ fn tail_input<'a>(
         &'a [&mut [f32]; FLOAT_CHANNELS],
     ),
     v: [&'a [i32]; 2],
-    #[cfg(target_arch = "x86_64")] avx2: Option<crate::Avx2>,
     o: usize,
 ) -> TailInput<'a> {
     #[cfg(target_arch = "x86_64")]
-    if let (Some(avx2), SumRing::Blocked(ints), SumRing::Blocked(floats)) = (avx2, sums.0, sums.1) {
+    if let (SumRing::Blocked(avx2, ints), SumRing::Blocked(_, floats)) = sums {
         let rows = crate::avx2::BlockedRows {
             ints,
             floats,
             first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
             v,
         };
-        return TailInput::Blocked(avx2, rows);
+        return TailInput::Blocked(*avx2, rows);
     }
     let _ = (sums, o);
     TailInput::Planar(TailRows {
@@ -450,9 +447,9 @@ impl TailInput<'_> {
 /// One row of a [`SumRing`].
 enum SumRow<'a, T, const K: usize> {
     Planar([&'a mut [T]; K]),
-    /// The ring's memory and the row's slot.
+    /// The kernels' token, the ring's memory and the row's slot.
     #[cfg(target_arch = "x86_64")]
-    Blocked(&'a mut [T], usize),
+    Blocked(crate::Avx2, &'a mut [T], usize),
 }
 
 impl<'m> Rows<'m> {
@@ -479,13 +476,6 @@ impl<'m> Rows<'m> {
     /// neighbours count them.
     #[inline(always)]
     fn carve(planes: memory::Planes<'m>, cols: usize, kernels: Kernels) -> Self {
-        #[cfg(target_arch = "x86_64")]
-        let blocked = kernels.avx2.is_some();
-        #[cfg(not(target_arch = "x86_64"))]
-        let blocked = {
-            let _ = kernels;
-            false
-        };
         let memory::Planes {
             mut words,
             mut floats,
@@ -497,19 +487,17 @@ impl<'m> Rows<'m> {
         let halves = &mut halves;
         Self {
             int_products: take_rows(words, cols),
-            int_sums: SumRing::carve(words, cols, blocked),
+            int_sums: SumRing::carve(words, cols, kernels),
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
             e_scratch: take_rows(words, cols),
             float_products: take_rows(floats, cols),
-            float_sums: SumRing::carve(floats, cols, blocked),
+            float_sums: SumRing::carve(floats, cols, kernels),
             magnitudes: take_rows(floats, cols),
             fields: take_rows(floats, cols),
             d: RowRing::carve(halves, cols),
             vert_d: take_rows(halves, cols),
             p0: RowRing::carve(&mut bytes, cols),
-            #[cfg(target_arch = "x86_64")]
-            avx2: kernels.avx2,
         }
     }
 }
@@ -654,10 +642,9 @@ impl Pass<'_> {
             let sums = match (rows.int_sums.row_mut(j), rows.float_sums.row_mut(j)) {
                 (SumRow::Planar(ints), SumRow::Planar(floats)) => Sums::Planar(ints, floats),
                 #[cfg(target_arch = "x86_64")]
-                (SumRow::Blocked(ints, slot), SumRow::Blocked(floats, _)) => match rows.avx2 {
-                    Some(avx2) => Sums::Blocked(avx2, ints, floats, slot),
-                    None => return, // never: blocked rings come with the kernels
-                },
+                (SumRow::Blocked(avx2, ints, slot), SumRow::Blocked(_, floats, _)) => {
+                    Sums::Blocked(avx2, ints, floats, slot)
+                }
                 #[cfg(target_arch = "x86_64")]
                 _ => return, // never: both rings are carved alike
             };
@@ -696,8 +683,6 @@ impl Pass<'_> {
             (&rows.int_sums, &rows.float_sums),
             (&rows.int_products, &rows.float_products),
             [rows.v[0].row(o), rows.v[1].row(o)],
-            #[cfg(target_arch = "x86_64")]
-            rows.avx2,
             o,
         );
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_mut().map(|row| first_mut(row, width));

@@ -42,6 +42,7 @@ mod shared_pair;
 pub mod viz;
 pub mod workers;
 
+pub use decoder_guard::panic_message;
 pub use error::{HostError, ImageProblem};
 pub use flow_planes::FlowPlanes;
 pub use gray::{Gray, luma_bt601};

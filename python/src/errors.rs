@@ -8,7 +8,7 @@ use pyo3::PyErr;
 use pyo3::exceptions::{
     PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
 };
-use reynoldsflow_host::HostError;
+use reynoldsflow_host::{HostError, panic_message};
 
 /// What went wrong inside a computation.
 pub enum Failure {
@@ -22,14 +22,7 @@ pub enum Failure {
 pub fn guarded<T>(f: impl FnOnce() -> Result<T, HostError>) -> Result<T, Failure> {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(result) => result.map_err(Failure::Host),
-        Err(payload) => {
-            let message = payload
-                .downcast_ref::<&str>()
-                .map(|s| (*s).to_owned())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "no message".to_owned());
-            Err(Failure::Panic(message))
-        }
+        Err(payload) => Err(Failure::Panic(panic_message(payload.as_ref()))),
     }
 }
 
