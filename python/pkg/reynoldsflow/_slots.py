@@ -45,8 +45,9 @@ from typing import Deque, Dict, List, Optional, Tuple
 import numpy
 import torch
 from torch.multiprocessing.reductions import reduce_tensor
+from torch.utils.data import get_worker_info
 
-__all__ = ["SlotTensor", "clip_tensor", "slots_received"]
+__all__ = ["SlotTensor", "slot_tensor"]
 
 # Slots a worker keeps; the main process holds at most this many of one
 # worker's clips without falling back to torch's shared memory.
@@ -59,8 +60,8 @@ _CONTROL = 8
 
 
 class SlotTensor(torch.Tensor):
-    """A clip made in a worker's slot. Operations on it give plain tensors;
-    multiprocessing sends it by slot (registered below)."""
+    """A tensor made in a worker's slot. Operations on it give plain
+    tensors; multiprocessing sends it by slot (registered below)."""
 
     __torch_function__ = torch._C._disabled_torch_function_impl
 
@@ -149,12 +150,13 @@ def _this_pool() -> Optional[_Pool]:
     return _pool if _pool is not None and _pool.pid == os.getpid() else None
 
 
-def clip_tensor(shape: Tuple[int, ...], limit: int = MAX_SLOTS) -> Optional[SlotTensor]:
-    """An uninitialised uint8 tensor of ``shape`` in one of this worker's
-    slots, or None (no ``memfd`` here, or every slot in use, or ``limit``
-    slots of its size are)."""
+def slot_tensor(shape: Tuple[int, ...], limit: int = MAX_SLOTS) -> Optional[SlotTensor]:
+    """An uninitialised uint8 tensor of ``shape`` in one of this
+    ``DataLoader`` worker's slots, or None: outside a worker, where there
+    is no ``memfd``, when every slot is in use, or ``limit`` slots of its
+    size are."""
     global _pool
-    if not hasattr(os, "memfd_create"):
+    if get_worker_info() is None or not hasattr(os, "memfd_create"):
         return None
     if _this_pool() is None:
         _pool = _Pool()
@@ -250,9 +252,3 @@ _received = _Received()
 def _rebuild(head, fd, shape):
     return _received.tensor(head, fd, shape)
 
-
-def slots_received() -> int:
-    """How many slots the main process has mapped (live pools): at most
-    ``MAX_SLOTS`` a worker, however many clips came through them."""
-    with _received.lock:
-        return len(_received.slots)

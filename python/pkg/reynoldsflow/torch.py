@@ -58,11 +58,11 @@ def _result_tensor(shape: Tuple[int, ...]) -> "torch.Tensor":
     every slot is in use, in torch's shared memory, as ``default_collate``
     makes its batches (sending it then passes its memory, where a tensor in
     private memory would first be copied into a new shared segment)."""
-    if get_worker_info() is None:
-        return torch.empty(shape, dtype=torch.uint8)
-    reps = _slots.clip_tensor(shape)
+    reps = _slots.slot_tensor(shape)
     if reps is not None:
         return reps
+    if get_worker_info() is None:
+        return torch.empty(shape, dtype=torch.uint8)
     # A private method of torch's (default_collate's way to shared memory):
     # where a torch lacks it, private memory, which torch copies to send.
     new_shared = getattr(torch.UntypedStorage, "_new_shared", None)
@@ -123,8 +123,8 @@ def collate(batch: Sequence[Tuple["torch.Tensor", Dict[str, Any]]]) -> Any:
     each batch: ``DataLoader(dataset, batch_size=32, collate_fn=collate)``."""
     reps = [rep for rep, _ in batch]
     if reps and all(r.shape == reps[0].shape and r.dtype == torch.uint8 for r in reps):
-        out = _result_tensor((len(reps),) + tuple(reps[0].shape))
-        if isinstance(out, _slots.SlotTensor):
+        out = _slots.slot_tensor((len(reps),) + tuple(reps[0].shape))
+        if out is not None:
             torch.stack(reps, out=out)
             return [out, default_collate([meta for _, meta in batch])]
     return default_collate(batch)
@@ -237,7 +237,6 @@ class ReynoldsFlowDataset(IterableDataset):
 
     def _pairs(self, frames: "_rf.FrameReader", meta: Dict[str, Any]) -> Iterator[Any]:
         stream, prev = None, None
-        in_worker = get_worker_info() is not None
         for index, frame in frames:
             if stream is None:
                 h, w = frame.shape
@@ -248,7 +247,7 @@ class ReynoldsFlowDataset(IterableDataset):
                 # In a worker, a few pairs at a time in slots (an unbatched
                 # pair goes to the main process by slot); the others in
                 # private memory, which a collate copies into its batch.
-                rep = _slots.clip_tensor((3, h, w), _slots.PAIR_SLOTS) if in_worker else None
+                rep = _slots.slot_tensor((3, h, w), _slots.PAIR_SLOTS)
                 if rep is None:
                     rep = torch.from_numpy(stream.push(frame))
                 else:
