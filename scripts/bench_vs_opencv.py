@@ -30,6 +30,10 @@ start-up, reading, computing and writing all included) divided by its pairs:
                in memory, only `calc` timed)  vs  `run --threads 1`, default
                scaling (per-frame min-max), 640x480
   run scaling  `run --threads 1` vs `run --threads 2` at 1280x720
+  run ceiling  one `run --threads 1` process vs two of them at once (ms per
+               pair of the pair of processes: wall time over both's pairs),
+               1280x720: the throughput two cores give this work as
+               independent processes, the ceiling of `run scaling`
 """
 
 import argparse
@@ -167,6 +171,21 @@ def time_run(cli, y4m, pairs, threads, seconds, min_runs=2):
     return times
 
 
+def time_run_twice(cli, y4m, pairs, seconds, min_runs=2):
+    """ms per pair of two `reynoldsflow run --threads 1` processes started
+    together: wall time until both exit over both's pairs."""
+    cmd = [cli, "run", y4m, "--out", "-", "--format", "rgb24", "--threads", "1"]
+    times = []
+    start = time.perf_counter()
+    while len(times) < min_runs or time.perf_counter() - start < seconds:
+        t = time.perf_counter()
+        procs = [subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for _ in range(2)]
+        if any(p.wait() != 0 for p in procs):
+            raise subprocess.CalledProcessError(1, cmd)
+        times.append((time.perf_counter() - t) * 1e3 / (2 * pairs))
+    return times
+
+
 def time_ours(binary, paths, mode, threads, seconds, min_iters):
     out = subprocess.run(
         [binary, "--prev", paths[0], "--next", paths[1], "--mode", mode,
@@ -243,6 +262,9 @@ def main():
             if (w, h) == (1280, 720):
                 ab("run scale", size, ("reynoldsflow run --threads 1", run(1)),
                    (f"reynoldsflow run --threads {cores}", run(cores)), args.run_rounds)
+                ab("run ceil", size, ("reynoldsflow run --threads 1", run(1)),
+                   ("two of them at once", lambda: time_run_twice(args.cli, y4m, pairs, s)),
+                   args.run_rounds)
         if args.only_run:
             continue
 
