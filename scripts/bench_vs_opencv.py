@@ -158,31 +158,21 @@ def time_dis_sequence(frames, threads, seconds, min_iters):
     return times
 
 
-def time_run(cli, y4m, pairs, threads, seconds, min_runs=2):
+def time_run(cli, y4m, pairs, threads, seconds, processes=1, min_runs=2):
     """ms per pair of whole `reynoldsflow run` processes streaming RGB24 to
-    /dev/null, one figure per process."""
+    /dev/null, one figure per round: `processes` of them started together,
+    wall time until all exit over all their pairs."""
     cmd = [cli, "run", y4m, "--out", "-", "--format", "rgb24", "--threads", str(threads)]
     times = []
     start = time.perf_counter()
     while len(times) < min_runs or time.perf_counter() - start < seconds:
         t = time.perf_counter()
-        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        times.append((time.perf_counter() - t) * 1e3 / pairs)
-    return times
-
-
-def time_run_twice(cli, y4m, pairs, seconds, min_runs=2):
-    """ms per pair of two `reynoldsflow run --threads 1` processes started
-    together: wall time until both exit over both's pairs."""
-    cmd = [cli, "run", y4m, "--out", "-", "--format", "rgb24", "--threads", "1"]
-    times = []
-    start = time.perf_counter()
-    while len(times) < min_runs or time.perf_counter() - start < seconds:
-        t = time.perf_counter()
-        procs = [subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for _ in range(2)]
-        if any(p.wait() != 0 for p in procs):
-            raise subprocess.CalledProcessError(1, cmd)
-        times.append((time.perf_counter() - t) * 1e3 / (2 * pairs))
+        procs = [subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                 for _ in range(processes)]
+        codes = [p.wait() for p in procs]
+        if any(codes):
+            raise subprocess.CalledProcessError(max(codes), cmd)
+        times.append((time.perf_counter() - t) * 1e3 / (processes * pairs))
     return times
 
 
@@ -253,8 +243,8 @@ def main():
             write_y4m(y4m, seq)
             pairs = SEQ_FRAMES - 1
 
-            def run(threads):
-                return lambda: time_run(args.cli, y4m, pairs, threads, s)
+            def run(threads, processes=1):
+                return lambda: time_run(args.cli, y4m, pairs, threads, s, processes)
 
             if (w, h) == (640, 480):
                 ab("run 1t", size, ("DIS ultrafast 1t", lambda: time_dis_sequence(seq, 1, s, n)),
@@ -263,7 +253,7 @@ def main():
                 ab("run scale", size, ("reynoldsflow run --threads 1", run(1)),
                    (f"reynoldsflow run --threads {cores}", run(cores)), args.run_rounds)
                 ab("run ceil", size, ("reynoldsflow run --threads 1", run(1)),
-                   ("two of them at once", lambda: time_run_twice(args.cli, y4m, pairs, s)),
+                   ("two of them at once", run(1, processes=2)),
                    args.run_rounds)
         if args.only_run:
             continue
