@@ -337,13 +337,12 @@ impl<'m> SliceEngine<'m> {
 /// The engine's rows, carved from its memory for one window width.
 struct Rows<'m> {
     int_products: [&'m mut [i32]; INT_CHANNELS],
-    int_sums: SumRing<'m, i32, INT_CHANNELS>,
+    sums: SumRings<'m>,
     e: [RowRing<'m, i32, E_DEPTH>; 2],
     v: [RowRing<'m, i32, V_DEPTH>; 2],
     /// `E` before its horizontal smoothing (the ring keeps it smoothed).
     e_scratch: [&'m mut [i32]; 2],
     float_products: [&'m mut [f32]; FLOAT_CHANNELS],
-    float_sums: SumRing<'m, f32, FLOAT_CHANNELS>,
     /// The output's `[|v_d|, |v_c|]`.
     magnitudes: [&'m mut [f32]; MAGNITUDE_ROWS],
     /// The output's `[v_c x, v_c y, v_d x, v_d y]`.
@@ -353,36 +352,62 @@ struct Rows<'m> {
     p0: RowRing<'m, u8, P0_DEPTH>,
 }
 
-/// The ring of one kind of structure sums (`K` channels): a ring per
-/// channel, or with the AVX2 kernels (their token beside it) one ring whose
-/// rows hold all `K` channels in blocks (`avx2`; the same memory).
-enum SumRing<'m, T, const K: usize> {
-    Planar([RowRing<'m, T, SUM_DEPTH>; K]),
-    /// The ring's memory, `SUM_DEPTH · K · cols` values (`avx2`'s layout).
+/// The rings of the five structure sums: a ring per channel, or with the
+/// AVX2 kernels (their token beside them) one ring for the integer channels
+/// and one for the `f32` ones, whose rows hold their channels in blocks
+/// (`avx2`'s layout; the same memory).
+enum SumRings<'m> {
+    Planar {
+        ints: [RowRing<'m, i32, SUM_DEPTH>; INT_CHANNELS],
+        floats: [RowRing<'m, f32, SUM_DEPTH>; FLOAT_CHANNELS],
+    },
+    /// Each ring's memory, `SUM_DEPTH · K · cols` values for `K` channels.
     #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, &'m mut [T]),
+    Blocked {
+        avx2: crate::Avx2,
+        ints: &'m mut [i32],
+        floats: &'m mut [f32],
+    },
 }
 
-impl<'m, T, const K: usize> SumRing<'m, T, K> {
-    /// The ring(s) of rows of `cols` values per channel, blocked where the
-    /// job runs the AVX2 kernels.
+impl<'m> SumRings<'m> {
+    /// The rings of rows of `cols` values per channel, the integer ones
+    /// from `words` and the `f32` ones from `floats`; blocked where the job
+    /// runs the AVX2 kernels.
     #[inline(always)]
-    fn carve(memory: &mut &'m mut [T], cols: usize, kernels: Kernels) -> Self {
+    fn carve(
+        words: &mut &'m mut [i32],
+        floats: &mut &'m mut [f32],
+        cols: usize,
+        kernels: Kernels,
+    ) -> Self {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx2) = kernels.avx2 {
-            return Self::Blocked(avx2, crate::ring::take(memory, SUM_DEPTH * K * cols));
+            return Self::Blocked {
+                avx2,
+                ints: crate::ring::take(words, SUM_DEPTH * INT_CHANNELS * cols),
+                floats: crate::ring::take(floats, SUM_DEPTH * FLOAT_CHANNELS * cols),
+            };
         }
         let _ = kernels;
-        Self::Planar(core::array::from_fn(|_| RowRing::carve(memory, cols)))
+        Self::Planar {
+            ints: core::array::from_fn(|_| RowRing::carve(words, cols)),
+            floats: core::array::from_fn(|_| RowRing::carve(floats, cols)),
+        }
     }
 
-    /// Row `t` of each channel's ring, or of the blocked ring.
+    /// Row `t` of every channel's ring, or the blocked rings and its slot.
     #[inline(always)]
-    fn row_mut(&mut self, t: usize) -> SumRow<'_, T, K> {
+    fn row_mut(&mut self, t: usize) -> Sums<'_> {
         match self {
-            Self::Planar(rings) => SumRow::Planar(rings.each_mut().map(|ring| ring.row_mut(t))),
+            Self::Planar { ints, floats } => Sums::Planar(
+                ints.each_mut().map(|ring| ring.row_mut(t)),
+                floats.each_mut().map(|ring| ring.row_mut(t)),
+            ),
             #[cfg(target_arch = "x86_64")]
-            Self::Blocked(avx2, ring) => SumRow::Blocked(*avx2, ring, t % SUM_DEPTH),
+            Self::Blocked { avx2, ints, floats } => {
+                Sums::Blocked(*avx2, ints, floats, t % SUM_DEPTH)
+            }
         }
     }
 }
@@ -392,10 +417,7 @@ impl<'m, T, const K: usize> SumRing<'m, T, K> {
 /// blocked rings and `V` (the rows it reads, not the ones the tail writes).
 #[inline(always)]
 fn tail_input<'a>(
-    sums: (
-        &'a SumRing<'_, i32, INT_CHANNELS>,
-        &'a SumRing<'_, f32, FLOAT_CHANNELS>,
-    ),
+    sums: &'a SumRings<'_>,
     products: (
         &'a [&mut [i32]; INT_CHANNELS],
         &'a [&mut [f32]; FLOAT_CHANNELS],
@@ -404,7 +426,7 @@ fn tail_input<'a>(
     o: usize,
 ) -> TailInput<'a> {
     #[cfg(target_arch = "x86_64")]
-    if let (SumRing::Blocked(avx2, ints), SumRing::Blocked(_, floats)) = sums {
+    if let SumRings::Blocked { avx2, ints, floats } = sums {
         let rows = crate::avx2::BlockedRows {
             ints,
             floats,
@@ -444,21 +466,13 @@ impl TailInput<'_> {
     }
 }
 
-/// One row of a [`SumRing`].
-enum SumRow<'a, T, const K: usize> {
-    Planar([&'a mut [T]; K]),
-    /// The kernels' token, the ring's memory and the row's slot.
-    #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, &'a mut [T], usize),
-}
-
 impl<'m> Rows<'m> {
     /// The vertical G of the five sums centred on window row `o`, into the
     /// product rows (free by then), from rings a channel each.
     #[inline(always)]
     fn structure_sums(&mut self, o: usize, n: usize) {
-        match (&self.int_sums, &self.float_sums) {
-            (SumRing::Planar(ints), SumRing::Planar(floats)) => {
+        match &self.sums {
+            SumRings::Planar { ints, floats } => {
                 for (ring, out) in ints.iter().zip(self.int_products.iter_mut()) {
                     vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
                 }
@@ -466,9 +480,9 @@ impl<'m> Rows<'m> {
                     vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
                 }
             }
-            // Blocked: the AVX2 tail sums them itself.
+            // The AVX2 tail sums them itself.
             #[cfg(target_arch = "x86_64")]
-            _ => {}
+            SumRings::Blocked { .. } => {}
         }
     }
 
@@ -485,14 +499,15 @@ impl<'m> Rows<'m> {
         let words = &mut words;
         let floats = &mut floats;
         let halves = &mut halves;
+        // Fields in carving order: each kind of memory in the order of
+        // `WORD_ROWS` and its neighbours.
         Self {
             int_products: take_rows(words, cols),
-            int_sums: SumRing::carve(words, cols, kernels),
+            float_products: take_rows(floats, cols),
+            sums: SumRings::carve(words, floats, cols, kernels),
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
             e_scratch: take_rows(words, cols),
-            float_products: take_rows(floats, cols),
-            float_sums: SumRing::carve(floats, cols, kernels),
             magnitudes: take_rows(floats, cols),
             fields: take_rows(floats, cols),
             d: RowRing::carve(halves, cols),
@@ -639,19 +654,10 @@ impl Pass<'_> {
                 kappa: config.kappa_split(),
                 shift: config.dn_shift,
             };
-            let sums = match (rows.int_sums.row_mut(j), rows.float_sums.row_mut(j)) {
-                (SumRow::Planar(ints), SumRow::Planar(floats)) => Sums::Planar(ints, floats),
-                #[cfg(target_arch = "x86_64")]
-                (SumRow::Blocked(avx2, ints, slot), SumRow::Blocked(_, floats, _)) => {
-                    Sums::Blocked(avx2, ints, floats, slot)
-                }
-                #[cfg(target_arch = "x86_64")]
-                _ => return, // never: both rings are carved alike
-            };
             let structure = StructureRows {
                 int_products: &mut rows.int_products,
                 float_products: &mut rows.float_products,
-                sums,
+                sums: rows.sums.row_mut(j),
                 // Free once `E` of this push is in its ring.
                 scratch: {
                     let [gx, gy, ..] = &mut rows.vert_d;
@@ -680,7 +686,7 @@ impl Pass<'_> {
         let reads_fields = sink.reads_fields();
         let width = n.saturating_sub(2 * HALO);
         let tail_rows = tail_input(
-            (&rows.int_sums, &rows.float_sums),
+            &rows.sums,
             (&rows.int_products, &rows.float_products),
             [rows.v[0].row(o), rows.v[1].row(o)],
             o,
