@@ -288,6 +288,14 @@ def test_clips_of_ever_larger_sizes_replace_slots(tmp_path):
     assert len(set(_slots._received.slots) - before) <= _slots.MAX_SLOTS
 
 
+class CollatedInSlot(ReynoldsFlowDataset):
+    """Yields whether `collate` stacked a batch in a slot, in the worker."""
+
+    def __iter__(self):
+        pairs = list(super().__iter__())[:4]
+        yield isinstance(collate(pairs)[0], _slots.SlotTensor)
+
+
 def test_collate_gives_default_collates_batches_stacked_in_slots(twenty_clips):
     root, _ = twenty_clips
 
@@ -305,16 +313,9 @@ def test_collate_gives_default_collates_batches_stacked_in_slots(twenty_clips):
     # worker) it is default_collate's.
     assert next(iter(DataLoader(CollatedInSlot(root), batch_size=None, num_workers=1)))
     pairs = list(ReynoldsFlowDataset(root, max_frames=3))[:4]
-    assert type(collate(pairs)[0]) is torch.Tensor
-    assert torch.equal(collate(pairs)[0], torch.stack([rep for rep, _ in pairs]))
+    here = collate(pairs)[0]
+    assert type(here) is torch.Tensor and torch.equal(here, torch.stack([rep for rep, _ in pairs]))
 
-
-class CollatedInSlot(ReynoldsFlowDataset):
-    """Yields whether `collate` stacked a batch in a slot, in the worker."""
-
-    def __iter__(self):
-        pairs = list(super().__iter__())[:4]
-        yield isinstance(collate(pairs)[0], _slots.SlotTensor)
 
 
 def test_ranks_are_disjoint_and_cover_everything(six_clips):

@@ -32,8 +32,8 @@ tensor of its own still points there.
 
 from __future__ import annotations
 
-import math
 import collections
+import math
 import mmap
 import os
 import threading
