@@ -179,7 +179,7 @@ fn cli_outputs(frames: &[Vec<u8>], (w, h): (usize, usize), flags: &[&str]) -> Ve
         out.to_str().unwrap(),
     ]);
     args.extend(flags);
-    let code = reynoldsflow_host::cli::run(&args);
+    let code = reynoldsflow_cli::run(&args);
     assert_eq!(
         format!("{code:?}"),
         format!("{:?}", std::process::ExitCode::SUCCESS),

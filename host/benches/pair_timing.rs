@@ -27,10 +27,10 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use reynoldsflow_core::{Frame, IntensityScale, Scaling};
-use reynoldsflow_host::cli::values::ScaleArg;
 use reynoldsflow_host::dispatch::Isa;
 use reynoldsflow_host::outputs::Variant;
 use reynoldsflow_host::pair_pool::PairPool;
+use reynoldsflow_host::settings::ScaleArg;
 
 mod common;
 use common::{COLS, FIXED, core_engine, moving_pair, read_gray};

@@ -18,10 +18,11 @@ use std::io::{self, BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use crate::sequence::{folder, input_error, peek, read_full, y4m};
+use crate::settings::choices;
 use crate::{HostError, image_io};
 
 /// The format of a capture (`--captured-format`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CapturedFormat {
     /// Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24).
     Rgb24,
@@ -31,16 +32,13 @@ pub enum CapturedFormat {
     PngDir,
 }
 
-impl CapturedFormat {
-    /// The name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            CapturedFormat::Rgb24 => "rgb24",
-            CapturedFormat::Y4m => "y4m",
-            CapturedFormat::PngDir => "png-dir",
-        }
-    }
+choices!(CapturedFormat {
+    Rgb24 => "rgb24", "Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24)";
+    Y4m => "y4m", "YUV4MPEG2 C444 (run --out - --format y4m), compared in YCbCr";
+    PngDir => "png-dir", "A folder of RGB8 PNGs in natural order of their names (run --out DIR)";
+});
 
+impl CapturedFormat {
     /// The format a path implies: a folder is `png-dir`, a `.y4m` file
     /// `y4m`, any other file `rgb24` (standard input is told by its first
     /// bytes instead, in [`Captured::open`]).

@@ -1,8 +1,12 @@
 //! The host's one error type. Every message names what it is about (a file,
-//! a flag) and the problem, so the CLI prints it as one actionable line.
+//! a setting) and the problem, so a front end shows it as one actionable
+//! line; a setting is named by [`Setting`], which each front end prints
+//! under its own name.
 
 use std::io;
 use std::path::PathBuf;
+
+use crate::settings::Setting;
 
 /// Why an input image was refused.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -95,10 +99,19 @@ pub enum HostError {
         /// Pixels given.
         len: usize,
     },
-    /// A parameter or flag value outside its domain.
+    /// A setting's value outside its domain.
+    #[error("{setting}: {problem}")]
+    Setting {
+        /// The setting at fault.
+        setting: Setting,
+        /// What is wrong and what is accepted.
+        problem: String,
+    },
+    /// A value outside its domain that is no setting (an image's size to
+    /// encode, a frame of a run).
     #[error("{name}: {problem}")]
     InvalidParameter {
-        /// The parameter (a flag name on the command line).
+        /// What the value is.
         name: String,
         /// What is wrong and what is accepted.
         problem: String,
@@ -114,6 +127,14 @@ impl HostError {
         Self::Io {
             path: path.into(),
             source,
+        }
+    }
+
+    /// A [`HostError::Setting`].
+    pub fn setting(setting: Setting, problem: impl Into<String>) -> Self {
+        Self::Setting {
+            setting,
+            problem: problem.into(),
         }
     }
 

@@ -1,7 +1,10 @@
 //! Host side of ReynoldsFlow: the float64 reference of the SPEC
 //! ([`reference`](mod@reference)), the fixed-point core run over whole frames
-//! ([`fixed_engine`]), image and `.npy` I/O, and the `reynoldsflow`
-//! command line ([`cli`]).
+//! ([`fixed_engine`]), frames, video, image and `.npy` I/O, the one
+//! [`Settings`](settings::Settings) every front end maps its names onto,
+//! the pipeline and datasets. The `reynoldsflow` command line
+//! (`reynoldsflow-cli`) and the evaluation (`reynoldsflow-eval`) are crates
+//! of their own over this one.
 //!
 //! ```
 //! use reynoldsflow_host::{Gray, reference::{self, FloatParams, FloatScaling}};
@@ -20,12 +23,11 @@ pub mod atomic;
 #[cfg(target_arch = "x86_64")]
 mod avx2_bytes;
 pub mod captured;
-pub mod cli;
 pub mod compare;
+pub mod dataset;
 mod decoder_guard;
 pub mod dispatch;
 mod error;
-pub mod eval;
 pub mod fixed_engine;
 pub mod flow_planes;
 pub mod gray;
@@ -38,6 +40,7 @@ pub mod pair_pool;
 pub mod pipeline;
 pub mod reference;
 pub mod sequence;
+pub mod settings;
 mod shared_pair;
 pub mod viz;
 pub mod workers;

@@ -10,10 +10,10 @@ use reynoldsflow_core::{
     Config, ExtremesSink, FlowPixel, Frame, FramePair, HALO, IntensityScale, Params, Plan, Scaling,
 };
 
-use crate::cli::values::{EngineKind, ScaleArg};
 use crate::fixed_engine::{self, MAX_STRIP_WIDTH};
 use crate::outputs::{OutputSpec, PairFields, Variant};
 use crate::pipeline::{self, Compute};
+use crate::settings::{EngineKind, ScaleArg};
 use crate::{FlowPlanes, HostError};
 
 /// The fixed engine's parameters, checked once, and the threads that run it.

@@ -26,12 +26,12 @@ use std::sync::{Arc, Mutex};
 use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
 
-use crate::cli::values::{EngineKind, ScaleArg, TileSize};
 use crate::fixed_engine::FrameEngine;
 use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame_into, y4m_header};
 use crate::page_buffer::{ByteBuffer, PageBytes};
 use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
+use crate::settings::{EngineKind, ScaleArg, Setting, TileSize};
 use crate::shared_pair::{Desk, SharedPair};
 use crate::{Gray, HostError};
 
@@ -76,9 +76,9 @@ impl Compute {
         match engine {
             EngineKind::Float => {
                 if tile.is_some() {
-                    return Err(HostError::invalid(
-                        "--tile",
-                        "only the fixed engine works in tiles; drop --tile or use --engine fixed",
+                    return Err(HostError::setting(
+                        Setting::Tile,
+                        "only the fixed engine works in tiles; leave the tile unset or use the fixed engine",
                     ));
                 }
             }
@@ -90,7 +90,9 @@ impl Compute {
                     Err(CoreError::LambdaOutOfRange) => {
                         return Err(lambda_range(intensity_scale, lambda));
                     }
-                    Err(e) => return Err(HostError::invalid("--intensity-scale", e.to_string())),
+                    Err(e) => {
+                        return Err(HostError::setting(Setting::IntensityScale, e.to_string()));
+                    }
                 }
                 compute.fixed = Some((params, core_scaling(scale)?));
             }
@@ -185,11 +187,11 @@ impl Compute {
     }
 }
 
-/// A tile the core refuses is the fault of `--tile`.
+/// A tile the core refuses is the fault of the tile setting.
 fn tile_error(e: HostError) -> HostError {
     match e {
         HostError::Core(c @ CoreError::TileOutOfFrame) => {
-            HostError::invalid("--tile", c.to_string())
+            HostError::setting(Setting::Tile, c.to_string())
         }
         e => e,
     }
@@ -230,7 +232,7 @@ pub(crate) fn core_params(
     })
 }
 
-/// `--scale` for the core, gains as its Q16.16.
+/// The scale setting for the core, gains as its Q16.16.
 pub(crate) fn core_scaling(scale: ScaleArg) -> Result<Scaling, HostError> {
     Ok(match scale {
         ScaleArg::MinMax => Scaling::PerFrameMinMax,
@@ -244,8 +246,8 @@ pub(crate) fn core_scaling(scale: ScaleArg) -> Result<Scaling, HostError> {
 /// A gain as the core's Q16.16, rounded to nearest.
 fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
     U16F16::checked_from_num(k).ok_or_else(|| {
-        HostError::invalid(
-            "--scale",
+        HostError::setting(
+            Setting::Scale,
             format!("{which} = {k} is beyond the fixed engine's range [0, 65536)"),
         )
     })
@@ -258,11 +260,11 @@ pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> Host
     let s = f64::from(intensity_scale.num()) / f64::from(intensity_scale.den());
     let low = (s * s / 262_144.0).max(0.5f64.powi(33));
     let high = 16_384.0 * s * s;
-    HostError::invalid(
-        "--lambda",
+    HostError::setting(
+        Setting::Lambda,
         format!(
             "{lambda} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
-             use --engine float or another --intensity-scale"
+             use the float engine or another intensity scale"
         ),
     )
 }

@@ -14,6 +14,7 @@
 //! This is the plain reading of the SPEC and reproduces the conformance
 //! vectors' rounding residue bit for bit on the 1×1 case.
 
+use crate::settings::Setting;
 use crate::{FlowPlanes, Gray, HostError};
 
 /// Radius of input one output pixel depends on (SPEC §6).
@@ -175,15 +176,15 @@ fn binomial5() -> [[f64; 5]; 5] {
 fn check_params(params: &FloatParams) -> Result<(), HostError> {
     let s = params.intensity_scale;
     if !(s.is_finite() && s > 0.0) {
-        return Err(HostError::invalid(
-            "intensity scale",
+        return Err(HostError::setting(
+            Setting::IntensityScale,
             format!("{s} is not a positive number"),
         ));
     }
     let l = params.lambda;
     if !(l.is_finite() && l > 0.0) {
-        return Err(HostError::invalid(
-            "lambda",
+        return Err(HostError::setting(
+            Setting::Lambda,
             format!("{l} is not a positive number"),
         ));
     }

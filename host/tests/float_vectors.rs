@@ -8,8 +8,8 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use reynoldsflow_host::cli::values::parse_ratio;
 use reynoldsflow_host::reference::{self, FLAT_RANGE, FloatFlow, FloatParams, FloatScaling};
+use reynoldsflow_host::settings::parse_ratio;
 use reynoldsflow_host::{Gray, image_io, npy};
 
 const VECTORS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/vectors");

@@ -7,10 +7,10 @@ use std::io::Cursor;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use reynoldsflow_core::IntensityScale;
-use reynoldsflow_host::cli::values::{EngineKind, ScaleArg};
 use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
 use reynoldsflow_host::pipeline::{self, Compute, Destination, Options};
 use reynoldsflow_host::sequence::y4m::Y4mSource;
+use reynoldsflow_host::settings::{EngineKind, ScaleArg};
 
 const W: usize = 160;
 const H: usize = 120;

@@ -8,6 +8,7 @@ use pyo3::PyErr;
 use pyo3::exceptions::{
     PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
 };
+use reynoldsflow_host::settings::Setting;
 use reynoldsflow_host::{HostError, panic_message};
 
 /// What went wrong inside a computation.
@@ -31,35 +32,21 @@ pub fn value_error(message: impl Into<String>) -> PyErr {
     PyValueError::new_err(message.into())
 }
 
-/// The command line's flag names in a host message, as this API's keywords.
-fn pythonic(message: &str) -> String {
-    [
-        ("--intensity-scale", "intensity_scale"),
-        ("--lambda", "lam"),
-        ("--engine", "engine"),
-        ("--scale", "scale"),
-        ("--tile", "tile"),
-        ("--no-rep", "rep=False"),
-        ("--viz", "viz"),
-        ("--npy-dtype", "npy_dtype"),
-        ("--image-format", "image_format"),
-        ("--jpeg-quality", "jpeg_quality"),
-        ("--short-side", "short_side"),
-        ("--resize", "resize"),
-        ("--step", "step"),
-        ("--fps", "fps"),
-        ("--npy", "npy"),
-        ("--flo", "flo"),
-    ]
-    .iter()
-    .fold(message.to_owned(), |m, (flag, keyword)| {
-        m.replace(flag, keyword)
-    })
+/// The keyword that sets `setting`.
+fn keyword(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Lambda => "lam",
+        Setting::Rep => "rep=False",
+        setting => setting.name(),
+    }
 }
 
 /// The host's error as a Python exception.
 pub fn host_error(e: HostError) -> PyErr {
-    let message = pythonic(&e.to_string());
+    let message = match &e {
+        HostError::Setting { setting, problem } => format!("{}: {problem}", keyword(*setting)),
+        e => e.to_string(),
+    };
     match e {
         HostError::Io { source, .. } => match source.kind() {
             std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),

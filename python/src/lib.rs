@@ -16,9 +16,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use reynoldsflow_host::cli::dataset;
-use reynoldsflow_host::cli::shard::Shard;
-use reynoldsflow_host::cli::status::Record;
+use reynoldsflow_host::dataset::{self, Record, Shard};
 use reynoldsflow_host::fixed_engine::FrameEngine;
 use reynoldsflow_host::outputs::{OutputSpec, PairFields, flo};
 use reynoldsflow_host::page_buffer::ByteBuffer;
@@ -33,7 +31,7 @@ mod settings;
 
 use errors::{Failure, guarded, host_error, value_error};
 use frames::{Frames, Output, gray};
-use settings::{Kwargs, Layout, Settings};
+use settings::{CallSettings, Kwargs, Layout};
 
 /// The mean length of `v_R = v_c + v_d` over the frame, in pixels per
 /// frame: how much the pair moves (0 for identical frames); the host's
@@ -125,7 +123,7 @@ fn pair_frames<'py>(
 /// The fields and representation of `(prev, next)`, computed without the GIL.
 fn compute_pair(
     py: Python<'_>,
-    settings: &Settings,
+    settings: &CallSettings,
     prev: &Frames<'_>,
     next: &Frames<'_>,
 ) -> PyResult<PairFields> {
@@ -150,7 +148,8 @@ fn represent<'py>(
     next: &Bound<'py, PyAny>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
-    let settings = Settings::parse(Kwargs::new(py, "represent", options, settings::IMAGE_KEYS)?)?;
+    let settings =
+        CallSettings::parse(Kwargs::new(py, "represent", options, settings::IMAGE_KEYS)?)?;
     let (p, n) = pair_frames(prev, next)?;
     let (h, w) = p.frame_shape();
     let fields = compute_pair(py, &settings, &p, &n)?;
@@ -175,7 +174,7 @@ fn fields<'py>(
     next: &Bound<'py, PyAny>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let settings = Settings::parse(Kwargs::new(py, "fields", options, &[])?)?;
+    let settings = CallSettings::parse(Kwargs::new(py, "fields", options, &[])?)?;
     let (p, n) = pair_frames(prev, next)?;
     let (h, w) = p.frame_shape();
     let planes = compute_pair(py, &settings, &p, &n)?.planes;
@@ -212,7 +211,7 @@ fn motion_score<'py>(
     next: &Bound<'py, PyAny>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<f64> {
-    let settings = Settings::parse(Kwargs::new(py, "motion_score", options, &[])?)?;
+    let settings = CallSettings::parse(Kwargs::new(py, "motion_score", options, &[])?)?;
     let (p, n) = pair_frames(prev, next)?;
     let fields = compute_pair(py, &settings, &p, &n)?;
     Ok(py.detach(|| mean_speed(&fields.planes)))
@@ -268,10 +267,10 @@ fn represent_clip<'py>(
     let keep_count = kw.flag("keep_count")?;
     let return_scores = kw.flag("return_scores")?;
     let threads = kw.threads()?;
-    let plan = kw.frame_args()?.plan();
+    let plan = kw.frame_plan()?;
     let source_fps = kw.rate("source_fps")?;
     let out = kw.object("out")?;
-    let settings = Settings::parse(kw)?;
+    let settings = CallSettings::parse(kw)?;
     let compute = settings.compute()?;
     let spec = settings.output_spec();
     let layout = settings.layout();
@@ -376,7 +375,7 @@ fn sized(frame: Gray, plan: &FramePlan) -> Result<Gray, HostError> {
 struct Stream {
     width: usize,
     height: usize,
-    settings: Settings,
+    settings: CallSettings,
     prev: Option<Gray>,
     /// Reused from pair to pair.
     worker: Mutex<PairWorker>,
@@ -392,7 +391,8 @@ impl Stream {
         height: usize,
         options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let settings = Settings::parse(Kwargs::new(py, "Stream", options, settings::IMAGE_KEYS)?)?;
+        let settings =
+            CallSettings::parse(Kwargs::new(py, "Stream", options, settings::IMAGE_KEYS)?)?;
         settings.compute()?;
         if width == 0 || height == 0 {
             return Err(value_error(format!(
@@ -527,9 +527,9 @@ fn convert<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kw = Kwargs::new(py, "convert", options, settings::CONVERT_KEYS)?;
-    let (engine, output, force) = settings::convert_args(kw)?;
+    let (item, force) = settings::convert_settings(kw)?;
     let record = py
-        .detach(|| guarded(|| dataset::convert(&src, &dst, &engine, &output, force)))
+        .detach(|| guarded(|| dataset::convert(&src, &dst, &item, force)))
         .map_err(Failure::into_pyerr)?;
     record_dict(py, &record)
 }
@@ -629,7 +629,7 @@ fn read_frames(
         options,
         &[settings::FRAME_KEYS, &["max_frames"]].concat(),
     )?;
-    let plan = kw.frame_args()?.plan();
+    let plan = kw.frame_plan()?;
     let max_frames = kw.max_frames()?;
     kw.done()?;
     let source = py

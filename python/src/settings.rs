@@ -1,17 +1,20 @@
-//! Keyword arguments: the engine, its parameters and the image variant, as
-//! the command line's `ComputeArgs`/`OutputArgs` (checked by the host the
-//! same way), parsed in one place for every function.
+//! Keyword arguments: Python's names for the host's one
+//! [`Settings`](reynoldsflow_host::settings::Settings) (the engine, its
+//! parameters and the image variant, checked by the host as every front
+//! end's), parsed in one place for every function.
 
 use multiversion::multiversion;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyString, PyTuple};
 use reynoldsflow_core::IntensityScale;
-use reynoldsflow_host::cli::run::{ComputeArgs, EngineArgs, FrameArgs, OutputArgs};
-use reynoldsflow_host::cli::values::{self, EngineKind, ScaleArg, TileSize};
-use reynoldsflow_host::outputs::{self, Fields, ImageFormatName, NpyDtype, OutputSpec, Variant};
+use reynoldsflow_host::dataset::ItemSettings;
+use reynoldsflow_host::outputs::{
+    self, DEFAULT_JPEG_QUALITY, Fields, ImageFormat, NpyDtype, OutputSpec, Variant,
+};
 use reynoldsflow_host::pipeline::Compute;
-use reynoldsflow_host::sequence::sampled::{self, Rate};
+use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate, Sampling};
+use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize, parse_choice};
 
 use crate::errors::{host_error, value_error};
 
@@ -114,8 +117,9 @@ impl<'py> Kwargs<'py> {
         Ok(self.get::<bool>(key)?.unwrap_or(false))
     }
 
-    /// `resize`, `short_side`, `step`, `fps` as the command line's flags.
-    pub fn frame_args(&mut self) -> PyResult<FrameArgs> {
+    /// `resize`, `short_side`, `step`, `fps`: which frames make pairs, at
+    /// what size.
+    pub fn frame_plan(&mut self) -> PyResult<FramePlan> {
         let function = self.function;
         let bad = |key: &str, e: String| value_error(format!("{function}(): {key}: {e}"));
         let resize = match self.take("resize")? {
@@ -157,11 +161,13 @@ impl<'py> Kwargs<'py> {
                 "{function}(): give step or fps, not both"
             )));
         }
-        Ok(FrameArgs {
-            resize,
-            short_side,
-            step,
-            fps,
+        Ok(FramePlan {
+            sampling: match (step, fps) {
+                (Some(k), _) => Sampling::Step(k),
+                (None, Some(rate)) => Sampling::Fps(rate),
+                (None, None) => Sampling::Every,
+            },
+            size: resize.or(short_side),
         })
     }
 
@@ -278,40 +284,21 @@ impl Layout {
     }
 }
 
-/// The checked engine, parameters and image of a call.
-pub struct Settings {
-    compute: ComputeArgs,
-    variant: Variant,
-    hsv_max: Option<f64>,
+/// A call's checked settings, and the layout of the images it returns.
+pub struct CallSettings {
+    settings: Settings,
     layout: Layout,
 }
 
-fn parse_engine(name: &str) -> PyResult<EngineKind> {
-    match name {
-        "fixed" => Ok(EngineKind::Fixed),
-        "float" => Ok(EngineKind::Float),
-        _ => Err(value_error(format!(
-            "engine = '{name}'; expected 'fixed' (the core, what embedded targets compute) or 'float' (the float64 reference)"
-        ))),
-    }
-}
-
-fn parse_variant(name: &str) -> PyResult<Variant> {
-    match name {
-        "dc" => Ok(Variant::Dc),
-        "dc0" => Ok(Variant::Dc0),
-        "cd" => Ok(Variant::Cd),
-        "hsv" => Ok(Variant::Hsv),
-        _ => Err(value_error(format!(
-            "variant = '{name}'; expected 'dc', 'dc0', 'cd' or 'hsv'"
-        ))),
-    }
+/// The value of `key` named `name`, as the host's settings name it.
+fn choice<T: settings::Choice>(key: &str, name: &str) -> PyResult<T> {
+    parse_choice(name).map_err(|e| value_error(format!("{key}: {e}")))
 }
 
 /// `scale`: "minmax", "fixed:KD,KC" or a pair (k_d, k_c).
 fn parse_scale(value: &Bound<'_, PyAny>) -> PyResult<ScaleArg> {
     if let Ok(s) = value.cast::<PyString>() {
-        return values::parse_scale(&s.to_cow()?).map_err(|e| value_error(format!("scale: {e}")));
+        return settings::parse_scale(&s.to_cow()?).map_err(|e| value_error(format!("scale: {e}")));
     }
     let (k_d, k_c): (f64, f64) = value.extract().map_err(|_| {
         PyTypeError::new_err(
@@ -362,7 +349,7 @@ fn ratio_of_float(x: f64) -> Option<(u32, u32)> {
 fn parse_intensity_scale(value: &Bound<'_, PyAny>) -> PyResult<IntensityScale> {
     let fail = |e: String| value_error(format!("intensity_scale: {e}"));
     if let Ok(s) = value.cast::<PyString>() {
-        return values::parse_intensity_scale(&s.to_cow()?).map_err(fail);
+        return settings::parse_intensity_scale(&s.to_cow()?).map_err(fail);
     }
     let (num, den): (u64, u64) = if let Ok(f) = value.cast::<PyFloat>() {
         let x = f.value();
@@ -395,20 +382,22 @@ fn parse_intensity_scale(value: &Bound<'_, PyAny>) -> PyResult<IntensityScale> {
     IntensityScale::new(num, den).map_err(|e| fail(format!("{num}/{den}: {e}")))
 }
 
-impl Settings {
+impl CallSettings {
     /// Take the computing keywords from `kw`; none may be left.
     pub fn parse(mut kw: Kwargs<'_>) -> PyResult<Self> {
-        let engine = parse_engine(
-            &kw.get::<String>("engine")?
-                .unwrap_or_else(|| "fixed".into()),
-        )?;
+        let engine = match kw.get::<String>("engine")? {
+            Some(name) => choice::<EngineKind>("engine", &name)?,
+            None => settings::DEFAULT_ENGINE,
+        };
         let scale = kw
             .take("scale")?
-            .map_or(Ok(ScaleArg::MinMax), |v| parse_scale(&v))?;
+            .map_or(Ok(settings::DEFAULT_SCALE), |v| parse_scale(&v))?;
         let intensity_scale = kw
             .take("intensity_scale")?
-            .map_or(Ok(IntensityScale::PER_255), |v| parse_intensity_scale(&v))?;
-        let lambda = kw.get::<f64>("lam")?.unwrap_or(1e-4);
+            .map_or(Ok(settings::DEFAULT_INTENSITY_SCALE), |v| {
+                parse_intensity_scale(&v)
+            })?;
+        let lambda = kw.get::<f64>("lam")?.unwrap_or(settings::DEFAULT_LAMBDA);
         if !(lambda.is_finite() && lambda > 0.0) {
             return Err(value_error(format!(
                 "lam = {lambda}; expected a positive number (e.g. 1e-4)"
@@ -424,7 +413,10 @@ impl Settings {
                 }
             })
             .transpose()?;
-        let variant = parse_variant(&kw.get::<String>("variant")?.unwrap_or_else(|| "dc".into()))?;
+        let variant = match kw.get::<String>("variant")? {
+            Some(name) => choice::<Variant>("variant", &name)?,
+            None => settings::DEFAULT_VARIANT,
+        };
         let hsv_max = kw.get::<f64>("hsv_max")?;
         if hsv_max.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
             return Err(value_error("hsv_max: expected a positive number of pixels"));
@@ -444,20 +436,21 @@ impl Settings {
                 kw.function
             )));
         }
-        let settings = Self {
-            compute: ComputeArgs {
+        let call = Self {
+            settings: Settings {
                 engine,
                 scale,
                 intensity_scale,
                 lambda,
                 tile,
+                variant,
+                hsv_max,
+                ..Settings::default()
             },
-            variant,
-            hsv_max,
             layout,
         };
-        settings.compute()?;
-        Ok(settings)
+        call.compute()?;
+        Ok(call)
     }
 
     /// The layout of returned images.
@@ -467,14 +460,14 @@ impl Settings {
 
     /// The host's computation, checked as `reynoldsflow pair` checks it.
     pub fn compute(&self) -> PyResult<Compute> {
-        self.compute.compute().map_err(host_error)
+        self.settings.compute().map_err(host_error)
     }
 
     /// The image to return.
     pub fn output_spec(&self) -> OutputSpec {
         OutputSpec {
-            variant: self.variant,
-            hsv_max: self.hsv_max,
+            variant: self.settings.variant,
+            hsv_max: self.settings.hsv_max,
             ..OutputSpec::default()
         }
     }
@@ -504,40 +497,27 @@ fn field_list(value: Option<Bound<'_, PyAny>>, key: &str, all: &str) -> PyResult
         .map_err(|e| value_error(format!("{key}: {e}")))
 }
 
-/// `convert`'s keywords as the command line's arguments, and `force`.
-pub fn convert_args(mut kw: Kwargs<'_>) -> PyResult<(EngineArgs, OutputArgs, bool)> {
+/// `convert`'s keywords as the settings of a dataset's items, and `force`.
+pub fn convert_settings(mut kw: Kwargs<'_>) -> PyResult<(ItemSettings, bool)> {
     let rep = kw.get::<bool>("rep")?.unwrap_or(true);
     let viz = kw.flag("viz")?;
     let npy = field_list(kw.take("npy")?, "npy", "v_c,v_d,v_R")?;
     let flo = field_list(kw.take("flo")?, "flo", "v_R")?;
     let keep_count = kw.flag("keep_count")?;
-    let max_frames = match kw.get::<i64>("max_frames")? {
-        None => None,
-        Some(n) if n >= 1 => Some(n as u64),
-        Some(n) => {
-            return Err(value_error(format!(
-                "max_frames = {n}; expected at least 1"
-            )));
-        }
-    };
-    let threads = kw.threads()? as u32;
+    let max_frames = kw.max_frames()?;
+    let threads = kw.threads()?;
     let force = kw.flag("force")?;
-    let frames = kw.frame_args()?;
+    let plan = kw.frame_plan()?;
     let npy_dtype = match kw.get::<String>("npy_dtype")?.as_deref() {
         None => None,
-        Some("f64" | "float64") => Some(NpyDtype::F64),
-        Some("f32" | "float32") => Some(NpyDtype::F32),
-        Some("f16" | "float16") => Some(NpyDtype::F16),
-        Some(other) => {
-            return Err(value_error(format!(
-                "npy_dtype = '{other}'; expected 'f16', 'f32' or 'f64'"
-            )));
-        }
+        Some("float64") => Some(NpyDtype::F64),
+        Some("float32") => Some(NpyDtype::F32),
+        Some("float16") => Some(NpyDtype::F16),
+        Some(other) => Some(choice::<NpyDtype>("npy_dtype", other)?),
     };
     let image_format = match kw.get::<String>("image_format")?.as_deref() {
-        None => None,
-        Some("png") => Some(ImageFormatName::Png),
-        Some("jpg" | "jpeg") => Some(ImageFormatName::Jpg),
+        None | Some("png") => None,
+        Some("jpg" | "jpeg") => Some(()),
         Some(other) => {
             return Err(value_error(format!(
                 "image_format = '{other}'; expected 'png' or 'jpg'"
@@ -553,30 +533,41 @@ pub fn convert_args(mut kw: Kwargs<'_>) -> PyResult<(EngineArgs, OutputArgs, boo
             )));
         }
     };
-    let settings = Settings::parse(kw)?;
-    let engine = EngineArgs {
-        compute: settings.compute,
-        threads: Some(threads),
-    };
-    let output = OutputArgs {
-        variant: settings.variant,
-        no_rep: !rep,
-        viz,
-        hsv_max: settings.hsv_max,
-        npy,
-        npy_dtype,
-        flo,
-        image_format,
-        jpeg_quality,
-        keep_count,
-        max_frames,
-        frames,
-    };
-    if output.npy_dtype.is_some() && output.npy.is_none() {
+    if jpeg_quality.is_some() && image_format.is_none() {
+        return Err(value_error(
+            "jpeg_quality applies to image_format='jpg' only",
+        ));
+    }
+    if npy_dtype.is_some() && npy.is_none() {
         return Err(value_error(
             "npy_dtype applies to npy; give npy=True (or field names)",
         ));
     }
-    output.check_types(false).map_err(host_error)?;
-    Ok((engine, output, force))
+    let call = CallSettings::parse(kw)?;
+    let spec = OutputSpec {
+        variant: call.settings.variant,
+        rep,
+        viz,
+        npy: npy.map(|f| f.0).unwrap_or_default(),
+        flo: flo.map(|f| f.0).unwrap_or_default(),
+        hsv_max: call.settings.hsv_max,
+        npy_dtype: npy_dtype.unwrap_or_default(),
+        image_format: match image_format {
+            None => ImageFormat::Png,
+            Some(()) => ImageFormat::Jpeg {
+                quality: jpeg_quality.unwrap_or(DEFAULT_JPEG_QUALITY),
+            },
+        },
+    };
+    let item = ItemSettings {
+        settings: Settings {
+            threads: Some(threads),
+            ..call.settings
+        },
+        spec,
+        keep_count,
+        max_frames,
+        plan,
+    };
+    Ok((item, force))
 }

@@ -4,13 +4,11 @@
 
 use clap::Parser;
 use reynoldsflow_core::IntensityScale;
-use reynoldsflow_host::cli::values::{self, ScaleArg};
 use reynoldsflow_host::outputs::Variant;
+use reynoldsflow_host::settings::{self, FirstFrame, ScaleArg, Settings, parse_choice};
 use ros2_client::Name;
 
-use crate::compute::Settings;
 use crate::cues::CueSettings;
-use crate::pairing::FirstFrame;
 
 /// Shown by `--help` below the flags.
 const AFTER_HELP: &str = "\
@@ -81,21 +79,21 @@ pub struct Args {
     /// and KC (|v_c|), the same for every frame; the fixed engine rounds
     /// gains to 1/65536.
     #[arg(long, value_name = "minmax|fixed:KD,KC", default_value = "minmax",
-          value_parser = values::parse_scale, help_heading = "Computation")]
+          value_parser = settings::parse_scale, help_heading = "Computation")]
     pub scale: ScaleArg,
     /// Intensity scale s (f = pixel * s) as an exact ratio or decimal,
     /// 6144/2^32 <= s <= 1.
     #[arg(long, value_name = "S", default_value = "1/255",
-          value_parser = values::parse_intensity_scale, help_heading = "Computation")]
+          value_parser = settings::parse_intensity_scale, help_heading = "Computation")]
     pub intensity_scale: IntensityScale,
     /// Tikhonov term lambda of the 2x2 solve (rounded to 2^-32).
     #[arg(long, value_name = "L", default_value = "1e-4",
-          value_parser = values::parse_lambda, help_heading = "Computation")]
+          value_parser = settings::parse_lambda, help_heading = "Computation")]
     pub lambda: f64,
     /// The image: dc = [|v_d|, |v_c|, f] (the ReynoldsFlow
     /// representation); dc0 = [|v_d|, 0, f]; cd = [|v_c|, |v_d|, f];
     /// hsv = colour wheel of v_R.
-    #[arg(long, value_enum, default_value_t = Variant::Dc, help_heading = "Computation")]
+    #[arg(long, value_parser = parse_choice::<Variant>, default_value = "dc", help_heading = "Computation")]
     pub variant: Variant,
     /// Threads that compute each pair [default: all cores]. The output
     /// does not depend on it.
@@ -106,7 +104,7 @@ pub struct Args {
     /// encoding, or a stamp going back) gives: drop = nothing (N frames,
     /// N-1 outputs); repeat = a copy of the first result; black = an
     /// all-zero image. Then one output per frame, labelled with it.
-    #[arg(long, value_enum, default_value_t = FirstFrame::Drop, help_heading = "Computation")]
+    #[arg(long, value_parser = parse_choice::<FirstFrame>, default_value = "drop", help_heading = "Computation")]
     pub first_frame: FirstFrame,
 
     /// With --cues: a pixel moves when |v_c| is above this, px.
@@ -136,11 +134,9 @@ impl Args {
             intensity_scale: self.intensity_scale,
             lambda: self.lambda,
             variant: self.variant,
-            threads: self.threads.map_or_else(
-                || std::thread::available_parallelism().map_or(1, |n| n.get()),
-                |n| n as usize,
-            ),
-            keep_pixels: self.cues.is_some(),
+            threads: self.threads.map(|n| n as usize),
+            first_frame: self.first_frame,
+            ..Settings::default()
         }
     }
 
@@ -241,8 +237,7 @@ mod tests {
             }
         ));
         assert_eq!(args.variant, Variant::Cd);
-        assert_eq!(args.settings().threads, 1);
-        assert!(args.settings().keep_pixels);
+        assert_eq!(args.settings().threads, Some(1));
         // The CLI's own messages for bad values.
         let err = Args::try_parse_from(["reynoldsflow-ros2", "--lambda=-1"]).unwrap_err();
         assert!(err.to_string().contains("--lambda"), "{err}");

@@ -11,30 +11,13 @@
 //! scripts/test-ros2 check them against `run`). Cues need every pixel's
 //! magnitudes, which the pool keeps, so they take the pool on one thread too.
 
-use reynoldsflow_core::{FlowPixel, Frame, IntensityScale};
-use reynoldsflow_host::cli::values::{EngineKind, ScaleArg};
+use reynoldsflow_core::{FlowPixel, Frame};
 use reynoldsflow_host::fixed_engine::FrameEngine;
-use reynoldsflow_host::outputs::{OutputSpec, Variant};
+use reynoldsflow_host::outputs::OutputSpec;
 use reynoldsflow_host::pair_pool::PairPool;
 use reynoldsflow_host::pipeline::Compute;
+use reynoldsflow_host::settings::Settings;
 use reynoldsflow_host::{Gray, HostError};
-
-/// The computation's settings, as the CLI's flags give them.
-#[derive(Clone, Copy, Debug)]
-pub struct Settings {
-    /// `--scale`.
-    pub scale: ScaleArg,
-    /// `--intensity-scale`.
-    pub intensity_scale: IntensityScale,
-    /// `--lambda`.
-    pub lambda: f64,
-    /// `--variant`.
-    pub variant: Variant,
-    /// Threads per pair, at least 1.
-    pub threads: usize,
-    /// Whether the pixels' magnitudes are wanted (for the cues).
-    pub keep_pixels: bool,
-}
 
 /// The engine, built once from checked settings.
 pub struct PairComputer {
@@ -54,22 +37,17 @@ enum Path {
 
 impl PairComputer {
     /// Check `settings` as `reynoldsflow run` checks its flags (the same
-    /// messages, naming the flag).
-    pub fn new(settings: Settings) -> Result<Self, HostError> {
+    /// messages, naming the setting); `keep_pixels`: whether the pixels'
+    /// magnitudes are wanted (for the cues).
+    pub fn new(settings: &Settings, keep_pixels: bool) -> Result<Self, HostError> {
         let spec = OutputSpec {
             variant: settings.variant,
             ..OutputSpec::default()
         };
-        let threads = settings.threads.max(1);
-        let path = if threads == 1 && !settings.keep_pixels {
+        let threads = settings.threads();
+        let path = if threads == 1 && !keep_pixels {
             Path::Run {
-                compute: Compute::new(
-                    EngineKind::Fixed,
-                    settings.scale,
-                    settings.intensity_scale,
-                    settings.lambda,
-                    None,
-                )?,
+                compute: settings.compute()?,
                 engine: FrameEngine::new(),
             }
         } else {
@@ -117,6 +95,8 @@ impl PairComputer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use reynoldsflow_host::outputs::Variant;
+    use reynoldsflow_host::settings::Setting;
 
     fn gray(width: usize, height: usize, seed: usize) -> Gray {
         let pixels = (0..width * height)
@@ -125,14 +105,11 @@ mod tests {
         Gray::new(width, height, pixels).unwrap()
     }
 
-    fn settings(variant: Variant, threads: usize, keep_pixels: bool) -> Settings {
+    fn settings(variant: Variant, threads: usize) -> Settings {
         Settings {
-            scale: ScaleArg::MinMax,
-            intensity_scale: IntensityScale::PER_255,
-            lambda: 1e-4,
             variant,
-            threads,
-            keep_pixels,
+            threads: Some(threads),
+            ..Settings::default()
         }
     }
 
@@ -141,21 +118,14 @@ mod tests {
         let (a, b) = (gray(70, 33, 0), gray(70, 33, 1));
         for variant in [Variant::Dc, Variant::Dc0, Variant::Cd, Variant::Hsv] {
             // `run`'s computation of one pair (the `pair` subcommand's too).
-            let compute = Compute::new(
-                EngineKind::Fixed,
-                ScaleArg::MinMax,
-                IntensityScale::PER_255,
-                1e-4,
-                None,
-            )
-            .unwrap();
+            let compute = Settings::default().compute().unwrap();
             let spec = OutputSpec {
                 variant,
                 ..OutputSpec::default()
             };
             let expected = spec.image(&compute.pair(&a, &b).unwrap());
             for (threads, keep) in [(1, false), (1, true), (2, false), (3, true)] {
-                let mut computer = PairComputer::new(settings(variant, threads, keep)).unwrap();
+                let mut computer = PairComputer::new(&settings(variant, threads), keep).unwrap();
                 let (rgb, pixels) = computer.pair(&a, &b, |p| p.len()).unwrap();
                 assert!(
                     rgb == expected,
@@ -168,10 +138,19 @@ mod tests {
     }
 
     #[test]
-    fn bad_settings_name_the_flag() {
-        let mut s = settings(Variant::Dc, 1, false);
+    fn bad_settings_name_the_setting() {
+        let mut s = settings(Variant::Dc, 1);
         s.lambda = 1e9;
-        let err = PairComputer::new(s).err().unwrap().to_string();
-        assert!(err.contains("--lambda"), "{err}");
+        let err = PairComputer::new(&s, false).err().unwrap();
+        assert!(
+            matches!(
+                err,
+                HostError::Setting {
+                    setting: Setting::Lambda,
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
 }

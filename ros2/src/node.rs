@@ -150,7 +150,7 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
     let topics = args.topics().map_err(NodeError::Usage)?;
     let discovery =
         Discovery::from_env(|k| std::env::var(k).ok()).map_err(NodeError::Environment)?;
-    let computer = PairComputer::new(args.settings())?;
+    let computer = PairComputer::new(&args.settings(), args.cues.is_some())?;
     let cues = match args.cues {
         Some(_) => Some(Cues::new(args.cue_settings()).map_err(NodeError::Usage)?),
         None => None,
@@ -167,7 +167,7 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
         topics.input,
         topics.output,
         args.variant.name(),
-        args.settings().threads,
+        args.settings().threads(),
         discovery.describe(),
         if args.reliable {
             "reliable"

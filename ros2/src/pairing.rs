@@ -14,22 +14,10 @@
 use std::fmt;
 
 use reynoldsflow_host::Gray;
+pub use reynoldsflow_host::settings::FirstFrame;
 
 use crate::luma::Encoding;
 use crate::msg::{Header, Time};
-
-/// What the first frame of a stream, which has no pair yet, gives.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum FirstFrame {
-    /// Nothing: N frames give N − 1 outputs, each labelled with the pair's
-    /// first frame (SPEC §5).
-    #[default]
-    Drop,
-    /// One output per frame, labelled with it; the first a copy of the second.
-    Repeat,
-    /// One output per frame, labelled with it; the first all zero.
-    Black,
-}
 
 /// A frame as the pairing sees it.
 pub struct Frame {

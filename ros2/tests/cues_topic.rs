@@ -12,9 +12,9 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use reynoldsflow_core::{Frame, IntensityScale};
-use reynoldsflow_host::cli::values::ScaleArg;
 use reynoldsflow_host::outputs::Variant;
 use reynoldsflow_host::pair_pool::PairPool;
+use reynoldsflow_host::settings::ScaleArg;
 use reynoldsflow_ros2::cues::{self, CueSettings, Cues};
 use reynoldsflow_ros2::discovery::Discovery;
 use reynoldsflow_ros2::msg::{Detection2DArray, Header, Image, Time};

@@ -20,8 +20,8 @@ use gst_video::prelude::*;
 use reynoldsflow_core::fixed::types::U32F32;
 use reynoldsflow_core::{Config, Frame, MAX_SIDE, Params, Pixels, Sink};
 use reynoldsflow_cues::Region;
-use reynoldsflow_host::cli::values::{self, ScaleArg};
 use reynoldsflow_host::pair_pool::PairPool;
+use reynoldsflow_host::settings::{self as values, ScaleArg};
 
 use super::{FirstFrame, ScaleMode, VariantMode};
 use crate::cues::{self, Cues};

@@ -31,7 +31,7 @@ pub fn encode(width: usize, height: usize, u: &[f64], v: &[f64]) -> Result<Vec<u
     );
     let side = |n: usize| {
         i32::try_from(n).map_err(|_| {
-            HostError::invalid("--flo", format!("{width}x{height} is too large for .flo"))
+            HostError::invalid(".flo", format!("{width}x{height} is too large for .flo"))
         })
     };
     let mut out = Vec::with_capacity(12 + 8 * width * height);

@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 use npyz::WriterBuilder;
 
 use crate::page_buffer::ByteBuffer;
+use crate::settings::choices;
 use crate::{FlowPlanes, HostError, atomic, image_io, viz};
 
 #[cfg(feature = "crash-injection")]
@@ -35,7 +36,7 @@ pub mod flo;
 pub mod shards;
 
 /// The representation variants (the paper's ablation), and the colour wheel.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Variant {
     /// [|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4).
     #[default]
@@ -48,17 +49,12 @@ pub enum Variant {
     Hsv,
 }
 
-impl Variant {
-    /// The name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Variant::Dc => "dc",
-            Variant::Dc0 => "dc0",
-            Variant::Cd => "cd",
-            Variant::Hsv => "hsv",
-        }
-    }
-}
+choices!(Variant {
+    Dc => "dc", "[|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4)";
+    Dc0 => "dc0", "[|v_d|, 0, f]: ablation without the curl-free magnitude";
+    Cd => "cd", "[|v_c|, |v_d|, f]: ablation with the magnitudes swapped";
+    Hsv => "hsv", "Middlebury colour wheel of v_R = v_c + v_d";
+});
 
 /// A field written by `--npy` and `--flo`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -83,7 +79,7 @@ impl Field {
 }
 
 /// `--npy-dtype`: the element type of `.npy` fields.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NpyDtype {
     /// IEEE binary16 (`<f2`), each float64 value rounded to nearest (ties to even).
     F16,
@@ -94,16 +90,11 @@ pub enum NpyDtype {
     F64,
 }
 
-impl NpyDtype {
-    /// The name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            NpyDtype::F16 => "f16",
-            NpyDtype::F32 => "f32",
-            NpyDtype::F64 => "f64",
-        }
-    }
-}
+choices!(NpyDtype {
+    F16 => "f16", "IEEE binary16 (<f2), each float64 value rounded to nearest (ties to even)";
+    F32 => "f32", "IEEE binary32 (<f4), each value rounded to nearest (ties to even)";
+    F64 => "f64", "IEEE binary64 (<f8): the values as computed";
+});
 
 /// `--image-format`: how images are stored.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -119,13 +110,18 @@ pub enum ImageFormat {
 }
 
 /// `--image-format`'s names on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormatName {
     /// Lossless PNG (the default).
     Png,
     /// Lossy JPEG (--jpeg-quality).
     Jpg,
 }
+
+choices!(ImageFormatName {
+    Png => "png", "Lossless PNG (the default)";
+    Jpg => "jpg", "Lossy JPEG (--jpeg-quality)";
+});
 
 /// The JPEG quality when `--jpeg-quality` is not given.
 pub const DEFAULT_JPEG_QUALITY: u8 = 95;
@@ -436,7 +432,7 @@ pub fn decode_npy_xy(bytes: &[u8]) -> Result<(usize, usize, Vec<f64>, Vec<f64>),
 }
 
 /// `--format` of `--out -`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum StreamFormat {
     /// Raw RGB8 frames back to back, 3*W*H bytes each, no header.
     #[default]
@@ -445,6 +441,11 @@ pub enum StreamFormat {
     /// (lossy: RGB becomes YCbCr).
     Y4m,
 }
+
+choices!(StreamFormat {
+    Rgb24 => "rgb24", "Raw RGB8 frames back to back, 3*W*H bytes each, no header";
+    Y4m => "y4m", "YUV4MPEG2 C444 with the input's frame rate; BT.601 limited range (lossy: RGB becomes YCbCr)";
+});
 
 /// The Y4M stream header for `w × h` frames at `fps`.
 pub fn y4m_header(width: usize, height: usize, fps: (u32, u32)) -> String {

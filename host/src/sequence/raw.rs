@@ -6,6 +6,7 @@ use std::io::Read;
 use std::path::PathBuf;
 
 use super::{Frame, FrameSource, index_stem, input_error, read_full};
+use crate::settings::Setting;
 use crate::{Gray, HostError, limits};
 
 /// Raw frames read from any reader.
@@ -30,12 +31,12 @@ impl RawSource {
         height: usize,
     ) -> Result<Self, HostError> {
         if width == 0 || height == 0 {
-            return Err(HostError::invalid(
-                "--raw",
+            return Err(HostError::setting(
+                Setting::Raw,
                 format!("{width}x{height} is not a usable frame size"),
             ));
         }
-        limits::check_frame_size(width, height).map_err(|e| HostError::invalid("--raw", e))?;
+        limits::check_frame_size(width, height).map_err(|e| HostError::setting(Setting::Raw, e))?;
         Ok(Self {
             name,
             reader,

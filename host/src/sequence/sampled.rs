@@ -10,7 +10,8 @@
 
 use reynoldsflow_cues::resample::{MAX_SIDE, Resize};
 
-use super::{Frame, FrameSource, input_error};
+use super::{Frame, FrameSource};
+use crate::settings::Setting;
 use crate::{Gray, HostError, limits};
 
 /// A frame rate in frames per second, as an exact ratio `num / den`.
@@ -42,7 +43,7 @@ impl Rate {
 pub fn parse_rate(s: &str) -> Result<Rate, String> {
     let usage =
         "expected frames per second above 0, as a decimal or a ratio (e.g. 10, 29.97, 30000/1001)";
-    let (num, den) = crate::cli::values::parse_ratio(s).map_err(|e| format!("{e}; {usage}"))?;
+    let (num, den) = crate::settings::parse_ratio(s).map_err(|e| format!("{e}; {usage}"))?;
     Rate::new(num, den).ok_or_else(|| format!("{s} frames per second; {usage}"))
 }
 
@@ -171,11 +172,11 @@ impl FramePlan {
             Sampling::Step(k) => Picker::step(k),
             Sampling::Fps(target) => {
                 let Some(source) = rate.and_then(|(n, d)| Rate::new(n, d)) else {
-                    return Err(input_error(
-                        name,
+                    return Err(HostError::setting(
+                        Setting::Fps,
                         format!(
-                            "--fps {} needs the input's frame rate, and it states none \
-                             (frame folders, raw frames and Y4M without an F tag have none); use --step K",
+                            "{} needs the input's frame rate, and {name} states none \
+                             (frame folders, raw frames and Y4M without an F tag have none); pick every K-th frame instead",
                             target.text()
                         ),
                     ));
@@ -292,14 +293,14 @@ fn gcd(mut a: u128, mut b: u128) -> u128 {
 /// `out` (reusing its memory); `frame` itself when the size is its own.
 pub fn resize_gray(frame: &Gray, size: FrameSize, out: &mut Gray) -> Result<(), HostError> {
     let (w, h) = size.of(frame.width, frame.height);
-    limits::check_frame_size(w, h).map_err(|e| HostError::invalid("--resize", e))?;
+    limits::check_frame_size(w, h).map_err(|e| HostError::setting(Setting::Resize, e))?;
     let resize = Resize::new(frame.width, frame.height, w, h)
-        .map_err(|e| HostError::invalid("--resize", e.to_string()))?;
+        .map_err(|e| HostError::setting(Setting::Resize, e.to_string()))?;
     out.pixels.resize(w * h, 0);
     (out.width, out.height) = (w, h);
     resize
         .frame(&frame.pixels, &mut out.pixels)
-        .map_err(|e| HostError::invalid("--resize", e.to_string()))
+        .map_err(|e| HostError::setting(Setting::Resize, e.to_string()))
 }
 
 /// A source with a [`FramePlan`] applied: the frames it picks, resized.

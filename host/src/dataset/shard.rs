@@ -6,6 +6,7 @@
 //! Indexed Job's variables give the shard.
 
 use crate::HostError;
+use crate::settings::Setting;
 
 /// Shard `index` of `count` (`index < count`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,7 +82,7 @@ impl Shard {
         let checked = |index: u64, count: u64, from: String| {
             Shard::new(index, count)
                 .map(|s| Some((s, from)))
-                .map_err(|e| HostError::invalid("--shard", e))
+                .map_err(|e| HostError::setting(Setting::Shard, e))
         };
         if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
             let min = number("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);

@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 
-use crate::image_io;
+use reynoldsflow_host::image_io;
 
 /// Colour of each curve kind: eight distinguishable hues.
 pub const PALETTE: [RGBColor; 8] = [

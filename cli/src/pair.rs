@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use reynoldsflow_core::Error as CoreError;
 
 use super::run::ComputeArgs;
-use crate::{HostError, atomic, image_io, npy};
+use reynoldsflow_host::{HostError, atomic, image_io, npy};
 
 /// Arguments of `reynoldsflow pair`.
 #[derive(Debug, clap::Args)]

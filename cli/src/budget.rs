@@ -4,8 +4,8 @@
 use clap::Args;
 use reynoldsflow_core::{HALO, MAX_SIDE, first_stage_pixels, working_bytes};
 
-use super::values::{self, TileSize};
-use crate::HostError;
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::settings::{self, TileSize};
 
 /// Arguments of `budget`.
 #[derive(Debug, Args)]
@@ -17,7 +17,7 @@ pub struct BudgetArgs {
     #[arg(long)]
     pub height: usize,
     /// Tile width × height (a tile wider or taller than the frame is the frame).
-    #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
+    #[arg(long, value_name = "TWxTH", value_parser = settings::parse_tile)]
     pub tile: TileSize,
 }
 

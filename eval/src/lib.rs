@@ -10,7 +10,7 @@
 //! [`plots`] (drawing), [`figures`] (what is drawn) and [`report`].
 //!
 //! ```no_run
-//! use reynoldsflow_host::eval::{self, protocol::EvalConfig};
+//! use reynoldsflow_eval::{self, protocol::EvalConfig};
 //! # fn main() -> Result<(), reynoldsflow_host::HostError> {
 //! let summary = eval::run(&EvalConfig::quick(), std::path::Path::new("eval-out"))?;
 //! println!("{} files", summary.files.len());
@@ -31,8 +31,8 @@ pub mod report;
 pub mod scenes;
 pub mod truth;
 
-use crate::{HostError, atomic, image_io};
 use protocol::{EvalConfig, SequenceResult};
+use reynoldsflow_host::{HostError, atomic, image_io};
 use scenes::{Pattern, Scenario};
 
 /// What [`run`] wrote.

@@ -13,7 +13,7 @@
 //! displacement of every pixel is exactly the pose's (see [`super::truth`]).
 
 use super::truth::Pose;
-use crate::Gray;
+use reynoldsflow_host::Gray;
 
 /// What is on the scene plane.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

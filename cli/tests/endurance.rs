@@ -10,7 +10,7 @@
 //!
 //! The stream is 1.5 G pixels, minutes in the test profile: this test runs
 //! in the release profile, from scripts/test
-//! (`cargo test --release -p reynoldsflow-host --test endurance`).
+//! (`cargo test --release -p reynoldsflow-cli --test endurance`).
 
 use std::io::{Read, Write};
 use std::process::{Command, Stdio};

@@ -1,5 +1,5 @@
 //! `dataset SRC DST --webdataset`: the items' results as WebDataset
-//! samples in tar shards ([`crate::outputs::shards`]) instead of folders.
+//! samples in tar shards ([`reynoldsflow_host::outputs::shards`]) instead of folders.
 //!
 //! A sample's key is `<item path>/<result stem>` (the item's output path
 //! relative to DST, `/`-separated, and the stem `dataset` names its files
@@ -27,18 +27,14 @@ use std::time::Instant;
 
 use serde_json::{Value, json};
 
-use super::dataset::{DatasetArgs, Item, ItemRunner, Outcome, failure_line, record, shard_key};
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::dataset::{Item, ItemRunner, Outcome, Shard, StatusLog, record, shard_key};
+use reynoldsflow_host::outputs::shards::{self, ShardNames, ShardWriter};
+use reynoldsflow_host::pipeline::{self, Destination, Sample, SampleSink, Summary};
+use reynoldsflow_host::sequence::input_error;
+
+use super::dataset::{DatasetArgs, failure_line};
 use super::progress::Progress;
-use super::run::{EngineArgs, OutputArgs};
-use super::shard::Shard;
-use super::status::StatusLog;
-use super::values::ScaleArg;
-use crate::HostError;
-use crate::outputs::shards::{self, ShardNames, ShardWriter};
-use crate::outputs::{ImageFormat, OutputSpec};
-use crate::pipeline::{self, Destination, Sample, SampleSink, Summary};
-use crate::sequence::input_error;
-use crate::sequence::sampled::FramePlan;
 
 /// `--shard-size` when not given: 1 GB.
 pub const DEFAULT_SHARD_SIZE: u64 = 1_000_000_000;
@@ -66,45 +62,6 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
                 .to_owned(),
         ),
     }
-}
-
-/// The options that shape a sample's bytes, as its `KEY.json` records them.
-pub fn settings(
-    engine: &EngineArgs,
-    spec: &OutputSpec,
-    output: &OutputArgs,
-    plan: &FramePlan,
-) -> Value {
-    let c = &engine.compute;
-    let scale = match c.scale {
-        ScaleArg::MinMax => "minmax".to_owned(),
-        ScaleArg::Fixed { k_d, k_c } => format!("fixed:{k_d},{k_c}"),
-    };
-    let names = |fields: &[crate::outputs::Field]| -> Vec<&str> {
-        fields.iter().map(|f| f.name()).collect()
-    };
-    json!({
-        "engine": c.engine.name(),
-        "scale": scale,
-        "intensity_scale": format!("{}/{}", c.intensity_scale.num(), c.intensity_scale.den()),
-        "lambda": c.lambda,
-        "tile": c.tile.map(|t| format!("{}x{}", t.width, t.height)),
-        "variant": spec.variant.name(),
-        "rep": spec.rep,
-        "viz": spec.viz,
-        "hsv_max": spec.hsv_max,
-        "npy": names(&spec.npy),
-        "npy_dtype": spec.npy_dtype.name(),
-        "flo": names(&spec.flo),
-        "image_format": spec.image_format.extension(),
-        "jpeg_quality": match spec.image_format {
-            ImageFormat::Jpeg { quality } => Some(quality),
-            ImageFormat::Png => None,
-        },
-        "keep_count": output.keep_count,
-        "max_frames": output.max_frames,
-        "frames": plan.describe(),
-    })
 }
 
 /// A sample's member name: `[DIR/]STEM.EXT` of a result's files as
@@ -320,7 +277,8 @@ impl Shards<'_> {
         let runner = self.runner;
         writer.begin_item();
         let result = (|| -> Result<Summary, HostError> {
-            let mut frames = super::dataset::open_item(&item.src, item.frames, &runner.plan)?;
+            let mut frames =
+                reynoldsflow_host::dataset::open_item(&item.src, item.frames, &runner.plan)?;
             let mut sink = ItemSamples {
                 writer: &mut *writer,
                 rel: &item.rel,

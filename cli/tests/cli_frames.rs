@@ -174,7 +174,7 @@ fn fps_10_on_a_30_fps_y4m_takes_every_third_frame() {
     assert_eq!(res.status.code(), Some(1));
     let err = stderr(&res);
     assert!(
-        err.contains("--fps 10 needs the input's frame rate"),
+        err.contains("--fps: 10 needs the input's frame rate"),
         "{err}"
     );
 }

@@ -11,8 +11,8 @@ use super::field::Flow;
 use super::metrics;
 use super::scenes::{Pattern, Scenario, SceneSpec, Sequence};
 use super::truth::{self, Pose};
-use crate::reference::{self, FloatFlow, FloatParams, FloatScaling};
-use crate::{Gray, HostError, fixed_engine, workers};
+use reynoldsflow_host::reference::{self, FloatFlow, FloatParams, FloatScaling};
+use reynoldsflow_host::{Gray, HostError, fixed_engine, workers};
 
 /// A flow estimate under evaluation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

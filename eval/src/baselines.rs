@@ -4,7 +4,7 @@
 //! pixel of frame n to frame n + 1.
 
 use super::field::{Flow, Plane};
-use crate::Gray;
+use reynoldsflow_host::Gray;
 
 /// Horn & Schunck (1981): global smoothness. The flow is the fixed point
 /// of `u = ū − Eₓ(Eₓū + E_y v̄ + E_t)/(α² + Eₓ² + E_y²)` (and `v` alike),
@@ -266,8 +266,8 @@ impl LucasKanade {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::scenes::{Pattern, Scenario, SceneSpec};
-    use crate::eval::truth::BORDER;
+    use crate::scenes::{Pattern, Scenario, SceneSpec};
+    use crate::truth::BORDER;
 
     /// Two frames of the smooth texture, the second shifted by `shift` px.
     fn shifted_texture(shift: f64) -> (Gray, Gray) {

@@ -1,6 +1,6 @@
 //! The `reynoldsflow` command: see `reynoldsflow --help` and
-//! `reynoldsflow_host::cli`.
+//! `reynoldsflow_cli`.
 
 fn main() -> std::process::ExitCode {
-    reynoldsflow_host::cli::run(std::env::args_os())
+    reynoldsflow_cli::run(std::env::args_os())
 }

@@ -12,12 +12,12 @@ use super::progress::Progress;
 use super::run::{
     EngineArgs, OutputArgs, RawInputArgs, count, install_interrupt_handler, progress_total,
 };
-use crate::HostError;
-use crate::captured::{Captured, CapturedFormat};
-use crate::compare::{Comparison, Difference, Outcome};
-use crate::outputs::{OutputSpec, StreamFormat};
-use crate::pipeline::{self, Compute, Destination, Options};
-use crate::sequence::{self, InputSpec, Peeked};
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::captured::{Captured, CapturedFormat};
+use reynoldsflow_host::compare::{Comparison, Difference, Outcome};
+use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
+use reynoldsflow_host::pipeline::{self, Compute, Destination, Options};
+use reynoldsflow_host::sequence::{self, InputSpec, Peeked};
 
 /// Shown by `reynoldsflow verify --help`.
 pub const EXAMPLES: &str = "\
@@ -71,7 +71,7 @@ pub struct VerifyArgs {
     /// Format of CAPTURED [default: png-dir for a folder, y4m for a .y4m
     /// file, rgb24 for any other file; on stdin y4m when it starts with a
     /// Y4M header, rgb24 otherwise].
-    #[arg(long, value_enum, value_name = "FORMAT")]
+    #[arg(long, value_parser = super::values::choice::<CapturedFormat>(), value_name = "FORMAT")]
     pub captured_format: Option<CapturedFormat>,
     /// Pass when no byte differs by more than N (0 to 255); 0: only when
     /// identical.
@@ -152,7 +152,7 @@ pub fn prepare(args: &VerifyArgs) -> Result<Plan, HostError> {
         format: args.captured_format,
         compute,
         spec,
-        options: out.options(args.engine.threads()),
+        options: out.options(&args.engine),
         tolerance: args.tolerance,
     })
 }

@@ -1,11 +1,11 @@
 //! `reynoldsflow eval`: the controlled-scene evaluation against exact
-//! ground truth (see [`crate::eval`]), written as a markdown report, a CSV
+//! ground truth (see [`reynoldsflow_eval`]), written as a markdown report, a CSV
 //! and PNG figures.
 
 use std::path::PathBuf;
 
-use crate::HostError;
-use crate::eval::{self, protocol::EvalConfig};
+use reynoldsflow_eval::{self as eval, protocol::EvalConfig};
+use reynoldsflow_host::HostError;
 
 /// Examples shown under `reynoldsflow eval --help`.
 pub const EXAMPLES: &str = "\

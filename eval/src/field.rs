@@ -2,7 +2,7 @@
 //! baselines share (Sobel gradient, window sums, bilinear reads). Borders
 //! replicate, as the SPEC's input clamp does.
 
-use crate::Gray;
+use reynoldsflow_host::Gray;
 
 /// A row-major float plane of `width · height` values.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,7 +1,7 @@
-//! `--max-pixels`: the input size limit of [`crate::limits`], as a flag of
+//! `--max-pixels`: the input size limit of [`reynoldsflow_host::limits`], as a flag of
 //! every subcommand that reads frames.
 
-use crate::limits;
+use reynoldsflow_host::limits;
 
 /// The input limits (shared by `pair`, `run` and `dataset`).
 #[derive(Debug, clap::Args)]

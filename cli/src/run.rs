@@ -10,15 +10,17 @@ use std::time::Instant;
 use reynoldsflow_core::IntensityScale;
 
 use super::progress::Progress;
-use super::values::{self, EngineKind, ScaleArg, TileSize};
-use crate::HostError;
-use crate::outputs::{
+use super::values::choice;
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::dataset::ItemSettings;
+use reynoldsflow_host::outputs::{
     self, DEFAULT_JPEG_QUALITY, DirWriter, Fields, ImageFormat, ImageFormatName, NpyDtype,
     OutputSpec, StreamFormat, Variant,
 };
-use crate::pipeline::{self, Compute, Destination, Options, Summary};
-use crate::sequence::sampled::{self, FramePlan, FrameSize, Rate, Sampling};
-use crate::sequence::{self, FrameSource, InputSpec};
+use reynoldsflow_host::pipeline::{self, Compute, Destination, Options, Summary};
+use reynoldsflow_host::sequence::sampled::{self, FramePlan, FrameSize, Rate, Sampling};
+use reynoldsflow_host::sequence::{self, FrameSource, InputSpec};
+use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize};
 
 /// Examples shown by `reynoldsflow run --help`.
 pub const EXAMPLES: &str = "\
@@ -43,38 +45,49 @@ Examples:
 #[command(next_help_heading = "Computation")]
 pub struct ComputeArgs {
     /// Engine: the fixed-point core, or the float64 reference.
-    #[arg(long, value_enum, default_value_t = EngineKind::Fixed)]
+    #[arg(long, value_parser = choice::<EngineKind>(), default_value = settings::DEFAULT_ENGINE.name())]
     pub engine: EngineKind,
     /// Magnitudes to bytes: per-frame min-max, or fixed gains KD (|v_d|)
     /// and KC (|v_c|), the same for every frame; the fixed engine rounds
     /// gains to 1/65536.
-    #[arg(long, value_name = "minmax|fixed:KD,KC", default_value = "minmax", value_parser = values::parse_scale)]
+    #[arg(long, value_name = "minmax|fixed:KD,KC", default_value = settings::DEFAULT_SCALE.to_string(), value_parser = settings::parse_scale)]
     pub scale: ScaleArg,
     /// Intensity scale s (f = pixel * s) as an exact ratio or decimal,
     /// 6144/2^32 <= s <= 1.
-    #[arg(long, value_name = "S", default_value = "1/255", value_parser = values::parse_intensity_scale)]
+    #[arg(long, value_name = "S", default_value = intensity_scale_text(settings::DEFAULT_INTENSITY_SCALE), value_parser = settings::parse_intensity_scale)]
     pub intensity_scale: IntensityScale,
     /// Tikhonov term lambda of the 2x2 solve (the fixed engine rounds it
     /// to 2^-32).
-    #[arg(long, value_name = "L", default_value = "1e-4", value_parser = values::parse_lambda)]
+    #[arg(long, value_name = "L", default_value = format!("{:e}", settings::DEFAULT_LAMBDA), value_parser = settings::parse_lambda)]
     pub lambda: f64,
     /// Tile size for the fixed engine (any, up to the frame); default:
     /// full-height strips as wide as the frame, up to 1280 columns. Every
     /// tiling gives the same output.
-    #[arg(long, value_name = "TWxTH", value_parser = values::parse_tile)]
+    #[arg(long, value_name = "TWxTH", value_parser = settings::parse_tile)]
     pub tile: Option<TileSize>,
 }
 
+/// `N/D` of an intensity scale, as `--intensity-scale` reads it.
+fn intensity_scale_text(s: reynoldsflow_core::IntensityScale) -> String {
+    format!("{}/{}", s.num(), s.den())
+}
+
 impl ComputeArgs {
+    /// These flags as the library's settings (the rest at their defaults).
+    pub fn settings(&self) -> Settings {
+        Settings {
+            engine: self.engine,
+            scale: self.scale,
+            intensity_scale: self.intensity_scale,
+            lambda: self.lambda,
+            tile: self.tile,
+            ..Settings::default()
+        }
+    }
+
     /// The checked computation.
     pub fn compute(&self) -> Result<Compute, HostError> {
-        Compute::new(
-            self.engine,
-            self.scale,
-            self.intensity_scale,
-            self.lambda,
-            self.tile,
-        )
+        self.settings().compute()
     }
 }
 
@@ -90,12 +103,17 @@ pub struct EngineArgs {
 }
 
 impl EngineArgs {
+    /// These flags as the library's settings.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            threads: self.threads.map(|n| n as usize),
+            ..self.compute.settings()
+        }
+    }
+
     /// `--threads`, or every core.
     pub fn threads(&self) -> usize {
-        self.threads.map_or_else(
-            || std::thread::available_parallelism().map_or(1, |n| n.get()),
-            |n| n as usize,
-        )
+        self.settings().threads()
     }
 }
 
@@ -106,7 +124,7 @@ pub struct OutputArgs {
     /// The image of each result, DIR/STEM.png: dc = [|v_d|, |v_c|, f]
     /// (the ReynoldsFlow representation); dc0 = [|v_d|, 0, f]; cd =
     /// [|v_c|, |v_d|, f]; hsv = colour wheel of v_R.
-    #[arg(long, value_enum, default_value_t = Variant::Dc)]
+    #[arg(long, value_parser = choice::<Variant>(), default_value = settings::DEFAULT_VARIANT.name())]
     pub variant: Variant,
     /// Do not write DIR/STEM.png (only the other outputs asked for).
     #[arg(long)]
@@ -128,11 +146,11 @@ pub struct OutputArgs {
     /// Element type of the --npy files: f64 (float64, as computed), f32 or
     /// f16, each value rounded to nearest (ties to even) from the float64
     /// field [default: f64].
-    #[arg(long, value_enum, value_name = "f16|f32|f64", requires = "npy")]
+    #[arg(long, value_parser = choice::<NpyDtype>(), value_name = "f16|f32|f64", requires = "npy")]
     pub npy_dtype: Option<NpyDtype>,
     /// How images are stored: png (lossless, STEM.png) or jpg (baseline
     /// JPEG, lossy, STEM.jpg; --jpeg-quality) [default: png].
-    #[arg(long, value_enum, value_name = "png|jpg")]
+    #[arg(long, value_parser = choice::<ImageFormatName>(), value_name = "png|jpg")]
     pub image_format: Option<ImageFormatName>,
     /// JPEG quality, 1 to 100, with --image-format jpg [default: 95].
     #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=100), requires = "image_format")]
@@ -224,15 +242,25 @@ impl OutputArgs {
         }
     }
 
-    /// Pipeline options with `threads`.
-    pub fn options(&self, threads: usize) -> Options {
-        Options {
-            threads,
+    /// What `dataset` makes of each item with these flags and `engine`'s.
+    pub fn item_settings(&self, engine: &EngineArgs) -> ItemSettings {
+        let spec = self.spec();
+        ItemSettings {
+            settings: Settings {
+                variant: spec.variant,
+                hsv_max: spec.hsv_max,
+                ..engine.settings()
+            },
+            spec,
             keep_count: self.keep_count,
-            max_frames: self.max_frames.map(|n| n as usize),
-            pair_names: self.frames.plan().picks(),
-            record_frames: false,
+            max_frames: self.max_frames,
+            plan: self.frames.plan(),
         }
+    }
+
+    /// Pipeline options on `engine`'s threads.
+    pub fn options(&self, engine: &EngineArgs) -> Options {
+        self.item_settings(engine).options(engine.threads())
     }
 
     /// The checks of the file-type flags beyond clap's (a bad command
@@ -275,7 +303,7 @@ pub struct RunArgs {
     /// Stream format of --out - [default: rgb24]: raw RGB8 frames back to
     /// back (e.g. ffmpeg -f rawvideo -pix_fmt rgb24 -s WxH -i -, or NumPy),
     /// or Y4M C444 for any Y4M reader or encoder.
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = choice::<StreamFormat>())]
     pub format: Option<StreamFormat>,
     /// How INPUT is read.
     #[command(flatten)]
@@ -322,7 +350,7 @@ impl RawInputArgs {
 }
 
 fn parse_size(s: &str) -> Result<(usize, usize), String> {
-    values::parse_tile(s)
+    settings::parse_tile(s)
         .map(|t| (t.width, t.height))
         .map_err(|_| "expected WxH with both sides at least 1 (e.g. 640x480)".to_owned())
 }
@@ -386,7 +414,7 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
         .frames
         .plan()
         .wrap(sequence::open(&input)?, &name)?;
-    let options = args.output.options(args.engine.threads());
+    let options = args.output.options(&args.engine);
     let progress = Progress::new(progress_total(&*source, &options), "results");
     let mut tick = || progress.inc();
 

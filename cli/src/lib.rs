@@ -1,5 +1,5 @@
-//! The `reynoldsflow` command line: one module per subcommand, shared flag
-//! value parsers in [`values`]. Errors print as one line,
+//! The `reynoldsflow` command line over `reynoldsflow-host`: one module per
+//! subcommand; the flags' names for the library's settings in [`values`]. Errors print as one line,
 //! `reynoldsflow: error: <what>: <problem>`; exit status 1 for a failed
 //! run, 2 for a malformed command line.
 
@@ -15,8 +15,6 @@ pub mod limits;
 pub mod pair;
 mod progress;
 pub mod run;
-pub mod shard;
-pub mod status;
 pub mod values;
 pub mod verify;
 pub mod webdataset;
@@ -102,7 +100,7 @@ where
         _ => Ok(()),
     };
     if let Err(e) = checked {
-        return bad_command_line(&e.to_string());
+        return bad_command_line(&values::message(&e));
     }
     let result = match &cli.command {
         Command::Pair(args) => pair::run(args),
@@ -113,13 +111,13 @@ where
         // Flag values refused before comparing are a bad command line (2), not a failed check (1).
         Command::Verify(args) => match verify::prepare(args) {
             Ok(plan) => verify::run(&plan),
-            Err(e) => return bad_command_line(&e.to_string()),
+            Err(e) => return bad_command_line(&values::message(&e)),
         },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("reynoldsflow: error: {e}");
+            eprintln!("reynoldsflow: error: {}", values::message(&e));
             ExitCode::FAILURE
         }
     }

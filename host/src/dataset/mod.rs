@@ -1,0 +1,511 @@
+//! Datasets: every video and frame folder under a source tree to a folder
+//! of outputs under a destination, same relative paths and stems,
+//! resumable (what `reynoldsflow dataset` and Python's `convert` and
+//! `files_from` run).
+//!
+//! - A video `SRC/a/b/clip.mp4` (or `.y4m`, `.avi`, …) → `DST/a/b/clip/`,
+//!   outputs named by frame index (`000000.png`, …).
+//! - A frame folder `SRC/a/seq1/` (any folder directly holding PNG/JPEG/PGM
+//!   files) → `DST/a/seq1/`, outputs named by the frames' stems.
+//!
+//! **Resume.** An item is finished when its output folder holds the marker
+//! `.reynoldsflow-done`, written (atomically) after the item's last output.
+//! It records the settings; a rerun skips items whose marker matches the
+//! current settings and redoes the rest (`force` redoes everything).
+//! Every output file is written under a hidden temp name and renamed, so
+//! no file under a final name is ever partial; the temp files a killed run
+//! leaves are removed when its item is redone.
+//!
+//! **Clusters.** A [`Shard`] takes its share of the items by a hash of
+//! their paths, so `N` processes share one dataset and one destination;
+//! each item's [`Record`] is one JSON line of a [`StatusLog`].
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use serde_json::json;
+
+use crate::outputs::{DirWriter, ImageFormat, OutputSpec};
+use crate::pipeline::{self, Compute, Destination, Options, Summary};
+use crate::sequence::folder::{FolderSource, is_frame_file};
+use crate::sequence::sampled::FramePlan;
+use crate::sequence::{self, FrameSource, InputSpec, input_error};
+use crate::settings::{ScaleArg, Setting, Settings};
+use crate::{HostError, atomic};
+
+pub mod shard;
+pub mod status;
+
+pub use shard::Shard;
+pub use status::{Record, Status, StatusLog};
+
+/// What every item of a dataset is made with, as a front end sets it.
+#[derive(Clone, Debug)]
+pub struct ItemSettings {
+    /// The computation (its variant and colour-wheel radius are `spec`'s).
+    pub settings: Settings,
+    /// What each result writes.
+    pub spec: OutputSpec,
+    /// N outputs for N frames (the last result repeated).
+    pub keep_count: bool,
+    /// Read at most this many frames of each item.
+    pub max_frames: Option<u64>,
+    /// Which frames make pairs, at what size.
+    pub plan: FramePlan,
+}
+
+impl ItemSettings {
+    /// The pipeline's options on `threads` workers.
+    pub fn options(&self, threads: usize) -> Options {
+        Options {
+            threads,
+            keep_count: self.keep_count,
+            max_frames: self.max_frames.map(|n| n as usize),
+            pair_names: self.plan.picks(),
+            record_frames: false,
+        }
+    }
+
+    /// The settings as WebDataset samples record them (`KEY.json`).
+    pub fn describe(&self) -> serde_json::Value {
+        let (c, spec) = (&self.settings, &self.spec);
+        let scale = match c.scale {
+            ScaleArg::MinMax => "minmax".to_owned(),
+            ScaleArg::Fixed { k_d, k_c } => format!("fixed:{k_d},{k_c}"),
+        };
+        let names = |fields: &[crate::outputs::Field]| -> Vec<&str> {
+            fields.iter().map(|f| f.name()).collect()
+        };
+        json!({
+            "engine": c.engine.name(),
+            "scale": scale,
+            "intensity_scale": format!("{}/{}", c.intensity_scale.num(), c.intensity_scale.den()),
+            "lambda": c.lambda,
+            "tile": c.tile.map(|t| format!("{}x{}", t.width, t.height)),
+            "variant": spec.variant.name(),
+            "rep": spec.rep,
+            "viz": spec.viz,
+            "hsv_max": spec.hsv_max,
+            "npy": names(&spec.npy),
+            "npy_dtype": spec.npy_dtype.name(),
+            "flo": names(&spec.flo),
+            "image_format": spec.image_format.extension(),
+            "jpeg_quality": match spec.image_format {
+                ImageFormat::Jpeg { quality } => Some(quality),
+                ImageFormat::Png => None,
+            },
+            "keep_count": self.keep_count,
+            "max_frames": self.max_frames,
+            "frames": self.plan.describe(),
+        })
+    }
+}
+
+/// The completion marker in each finished item's output folder.
+pub const MARKER: &str = ".reynoldsflow-done";
+
+/// File extensions taken as videos (decoded natively for `.y4m`, by ffmpeg
+/// otherwise), compared case-insensitively.
+pub const VIDEO_EXTENSIONS: [&str; 18] = [
+    "y4m", "mp4", "m4v", "mov", "avi", "mkv", "webm", "mpg", "mpeg", "mpe", "ts", "mts", "m2ts",
+    "wmv", "flv", "ogv", "3gp", "gif",
+];
+
+/// One video or frame folder.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Item {
+    /// The video file or frame folder.
+    pub src: PathBuf,
+    /// Output folder relative to DST.
+    pub rel: PathBuf,
+    /// A frame folder (else a video).
+    pub frames: bool,
+}
+
+fn is_video(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| VIDEO_EXTENSIONS.iter().any(|v| e.eq_ignore_ascii_case(v)))
+}
+
+/// Every item under `src`, sorted by output path; `skip` (the destination,
+/// when it lies inside the source) is not searched.
+pub fn discover(src: &Path, skip: Option<&Path>) -> Result<Vec<Item>, HostError> {
+    let meta = fs::metadata(src).map_err(|e| HostError::io(src, e))?;
+    let mut items = Vec::new();
+    if meta.is_file() {
+        let stem = src.file_stem().unwrap_or(src.as_os_str());
+        items.push(Item {
+            src: src.to_owned(),
+            rel: PathBuf::from(stem),
+            frames: false,
+        });
+        return Ok(items);
+    }
+    walk(src, Path::new(""), skip, &mut items)?;
+    items.sort_by(|a, b| a.rel.cmp(&b.rel));
+    Ok(items)
+}
+
+fn walk(
+    dir: &Path,
+    rel: &Path,
+    skip: Option<&Path>,
+    items: &mut Vec<Item>,
+) -> Result<(), HostError> {
+    if skip.is_some_and(|s| fs::canonicalize(dir).is_ok_and(|d| d == s)) {
+        return Ok(());
+    }
+    let mut has_frames = false;
+    let mut entries: Vec<_> = fs::read_dir(dir)
+        .map_err(|e| HostError::io(dir, e))?
+        .filter_map(Result::ok)
+        .collect();
+    entries.sort_by_key(|e| e.file_name());
+    for entry in entries {
+        let name = entry.file_name();
+        if name.to_string_lossy().starts_with('.') {
+            continue;
+        }
+        let path = entry.path();
+        let Ok(kind) = entry.file_type() else {
+            continue;
+        };
+        if kind.is_dir() {
+            walk(&path, &rel.join(&name), skip, items)?;
+        } else if path.is_file() {
+            if is_frame_file(&path) {
+                has_frames = true;
+            } else if is_video(&path) {
+                let stem = path.file_stem().unwrap_or(&name);
+                items.push(Item {
+                    src: path.clone(),
+                    rel: rel.join(stem),
+                    frames: false,
+                });
+            }
+        }
+    }
+    if has_frames {
+        items.push(Item {
+            src: dir.to_owned(),
+            rel: rel.to_owned(),
+            frames: true,
+        });
+    }
+    Ok(())
+}
+
+/// The items listed in `list` (`-`: stdin), one path relative to `src` per
+/// line (or absolute, inside `src`); blank lines and lines starting with
+/// `#` are skipped. See [`listed`].
+pub fn manifest(src: &Path, list: &Path) -> Result<Vec<Item>, HostError> {
+    let text = if list.as_os_str() == "-" {
+        std::io::read_to_string(std::io::stdin()).map_err(|e| HostError::io("stdin", e))?
+    } else {
+        fs::read_to_string(list).map_err(|e| HostError::io(list, e))?
+    };
+    let lines = text
+        .lines()
+        .map(|line| line.trim_end_matches('\r'))
+        .enumerate()
+        .filter(|(_, line)| !line.trim().is_empty() && !line.starts_with('#'))
+        .map(|(n, line)| (format!("line {}", n + 1), Path::new(line)));
+    listed(src, list, lines)
+}
+
+/// The items of `paths` (each with the label its problems name, and
+/// relative to `src` or absolute inside it), sorted by output path like
+/// [`discover`]'s; `origin` is where the list came from. A folder is a
+/// frame folder, anything else a video; a path that does not exist becomes
+/// an item that fails when it is opened.
+pub fn listed<'a>(
+    src: &Path,
+    origin: &Path,
+    paths: impl IntoIterator<Item = (String, &'a Path)>,
+) -> Result<Vec<Item>, HostError> {
+    if !src.is_dir() {
+        return Err(input_error(
+            src,
+            "--files-from lists paths relative to SRC, so SRC must be a folder",
+        ));
+    }
+    let mut items = Vec::new();
+    for (label, path) in paths {
+        let problem =
+            |problem: &str| input_error(origin, format!("{label}: {}: {problem}", path.display()));
+        let rel = if path.is_absolute() {
+            path.strip_prefix(src)
+                .map_err(|_| problem("not inside SRC"))?
+        } else {
+            path
+        };
+        let rel: PathBuf = rel
+            .components()
+            .filter(|c| !matches!(c, std::path::Component::CurDir))
+            .collect();
+        if rel.as_os_str().is_empty()
+            || rel
+                .components()
+                .any(|c| !matches!(c, std::path::Component::Normal(_)))
+        {
+            return Err(problem("expected a path inside SRC (no '..')"));
+        }
+        let full = src.join(&rel);
+        let frames = full.is_dir();
+        let out = if frames {
+            rel.clone()
+        } else {
+            let stem = rel.file_stem().unwrap_or(rel.as_os_str());
+            rel.parent().unwrap_or(Path::new("")).join(stem)
+        };
+        items.push(Item {
+            src: full,
+            rel: out,
+            frames,
+        });
+    }
+    items.sort_by(|a, b| a.rel.cmp(&b.rel).then_with(|| a.src.cmp(&b.src)));
+    items.dedup();
+    Ok(items)
+}
+
+/// The key an item is sharded by: its source path relative to `src`, with
+/// `/` separators (the file name when SRC is the item itself).
+pub fn shard_key(src: &Path, item: &Item) -> String {
+    let rel = item
+        .src
+        .strip_prefix(src)
+        .ok()
+        .filter(|r| !r.as_os_str().is_empty())
+        .or_else(|| item.src.file_name().map(Path::new))
+        .unwrap_or(&item.src);
+    rel.components()
+        .map(|c| c.as_os_str().to_string_lossy())
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
+/// How an item ended.
+pub enum Outcome {
+    /// Computed and marked finished.
+    Done(Summary),
+    /// Already finished with the same settings.
+    Skipped,
+    /// Refused or failed: why.
+    Failed(String),
+    /// Stopped by Ctrl-C before it was finished.
+    Interrupted,
+}
+
+/// The marker's text: what was made, and with which options (and, when
+/// `--step` or `--fps` picked them, the input frames used).
+fn marker_text(item: &Item, summary: &Summary, options: &str) -> String {
+    let mut text = format!(
+        "reynoldsflow dataset item\nsource: {}\nframes: {}\nresults: {}\noutputs: {}\noptions: {options}\n",
+        item.src.display(),
+        summary.frames,
+        summary.results,
+        summary.outputs
+    );
+    if let Some(used) = &summary.source_frames {
+        let list: Vec<String> = used.iter().map(usize::to_string).collect();
+        text += &format!("source_frames: {}\n", list.join(" "));
+    }
+    text
+}
+
+/// A finished item's marker: its options line, frames and outputs.
+struct Marker {
+    options: String,
+    frames: Option<usize>,
+    outputs: Option<usize>,
+    source_frames: Option<Vec<usize>>,
+}
+
+fn finished(out: &Path) -> Option<Marker> {
+    let text = fs::read_to_string(out.join(MARKER)).ok()?;
+    let field = |name: &str| text.lines().find_map(|l| l.strip_prefix(name));
+    Some(Marker {
+        options: field("options: ")?.to_owned(),
+        frames: field("frames: ").and_then(|v| v.parse().ok()),
+        outputs: field("outputs: ").and_then(|v| v.parse().ok()),
+        source_frames: field("source_frames: ").map(|v| {
+            v.split_whitespace()
+                .filter_map(|n| n.parse().ok())
+                .collect()
+        }),
+    })
+}
+
+/// An item's frames, as `dataset` reads them (a frame folder, or a video),
+/// through `plan`.
+pub fn open_item(
+    src: &Path,
+    frames: bool,
+    plan: &FramePlan,
+) -> Result<Box<dyn FrameSource>, HostError> {
+    let source: Box<dyn FrameSource> = if frames {
+        Box::new(FolderSource::dir(src)?)
+    } else {
+        sequence::open(&InputSpec::Path {
+            path: src.to_owned(),
+            raw: None,
+        })?
+    };
+    plan.wrap(source, &src.display().to_string())
+}
+
+/// What every item is made with: checked once, shared by the workers.
+pub struct ItemRunner {
+    /// The checked computation.
+    pub compute: Compute,
+    /// What each result writes.
+    pub spec: OutputSpec,
+    /// How the pipeline runs each item.
+    pub options: Options,
+    /// Which frames make pairs, at what size.
+    pub plan: FramePlan,
+    fingerprint: String,
+    /// The settings as WebDataset samples record them.
+    pub settings: serde_json::Value,
+    /// Redo finished items.
+    pub force: bool,
+}
+
+impl ItemRunner {
+    /// Check the options; each item runs on `threads` workers.
+    pub fn new(item: &ItemSettings, threads: usize, force: bool) -> Result<Self, HostError> {
+        let compute = item.settings.compute()?;
+        let spec = item.spec.clone();
+        if !spec.writes_anything() {
+            return Err(HostError::setting(
+                Setting::Rep,
+                "nothing left to write: no representation image, and no colour wheel, .npy or .flo asked for",
+            ));
+        }
+        let plan = item.plan;
+        let mut fingerprint = format!(
+            "{} {:?} scale={:?} s={}/{} lambda={} keep_count={} max_frames={:?}",
+            spec.describe(),
+            compute.engine(),
+            item.settings.scale,
+            item.settings.intensity_scale.num(),
+            item.settings.intensity_scale.den(),
+            item.settings.lambda,
+            item.keep_count,
+            item.max_frames
+        );
+        // Only with --step, --fps, --resize or --short-side, so that
+        // markers made before them still match.
+        if !plan.is_identity() {
+            fingerprint += &format!(" {}", plan.describe());
+        }
+        let mut options = item.options(threads);
+        options.record_frames = plan.picks();
+        let settings = item.describe();
+        Ok(Self {
+            compute,
+            spec,
+            options,
+            plan,
+            fingerprint,
+            settings,
+            force,
+        })
+    }
+
+    /// One item into the folder `out`: skipped when finished with these
+    /// options, else computed, then marked finished.
+    pub fn process(&self, item: &Item, out: &Path, on_output: &mut dyn FnMut()) -> Outcome {
+        if !self.force && finished(out).is_some_and(|m| m.options == self.fingerprint) {
+            return Outcome::Skipped;
+        }
+        let result = (|| -> Result<Summary, HostError> {
+            let marker = out.join(MARKER);
+            if marker.exists() {
+                fs::remove_file(&marker).map_err(|e| HostError::io(&marker, e))?;
+            }
+            let mut source = open_item(&item.src, item.frames, &self.plan)?;
+            let dir = DirWriter::prepare(out, &self.spec)?;
+            let summary = pipeline::process(
+                &mut *source,
+                &self.compute,
+                Destination::Dir(&dir),
+                self.options,
+                on_output,
+            )?;
+            if summary.frames == 0 {
+                return Err(input_error(&item.src, "no frames"));
+            }
+            atomic::write_file(
+                &marker,
+                marker_text(item, &summary, &self.fingerprint).as_bytes(),
+            )?;
+            Ok(summary)
+        })();
+        match result {
+            Ok(summary) => Outcome::Done(summary),
+            Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
+            Err(e) => Outcome::Failed(e.to_string()),
+        }
+    }
+}
+
+/// The status record of `item`, written to `out`.
+pub fn record(item: &Item, out: &Path, outcome: &Outcome, seconds: f64) -> Record {
+    let mut r = Record {
+        path: item.src.display().to_string(),
+        output: out.display().to_string(),
+        status: Status::Done,
+        frames: None,
+        outputs: None,
+        seconds,
+        error: None,
+        source_frames: None,
+    };
+    match outcome {
+        Outcome::Done(s) => {
+            (r.frames, r.outputs) = (Some(s.frames), Some(s.outputs));
+            r.source_frames = s.source_frames.clone();
+        }
+        Outcome::Skipped => {
+            r.status = Status::Skipped;
+            if let Some(m) = finished(out) {
+                (r.frames, r.outputs) = (m.frames, m.outputs);
+                r.source_frames = m.source_frames;
+            }
+        }
+        Outcome::Failed(why) => (r.status, r.error) = (Status::Failed, Some(why.clone())),
+        Outcome::Interrupted => r.status = Status::Interrupted,
+    }
+    r
+}
+
+/// One video or frame folder `src` into the folder `out`, exactly as
+/// `dataset` makes each item (same files, same marker: resumable, and
+/// skipped when finished with the same options). Bad options are an
+/// error; a bad input is a record with status `failed`.
+pub fn convert(
+    src: &Path,
+    out: &Path,
+    settings: &ItemSettings,
+    force: bool,
+) -> Result<Record, HostError> {
+    let runner = ItemRunner::new(settings, settings.settings.threads(), force)?;
+    let item = Item {
+        src: src.to_owned(),
+        rel: PathBuf::new(),
+        frames: src.is_dir(),
+    };
+    let started = Instant::now();
+    let outcome = runner.process(&item, out, &mut || {});
+    Ok(record(
+        &item,
+        out,
+        &outcome,
+        started.elapsed().as_secs_f64(),
+    ))
+}
