@@ -183,7 +183,7 @@ fn a_bad_file_is_reported_and_skipped_and_the_exit_status_says_so() {
 #[test]
 #[cfg_attr(
     not(feature = "crash-injection"),
-    ignore = "the crash hook needs --features reynoldsflow-host/crash-injection (scripts/test)"
+    ignore = "the crash hook needs --features reynoldsflow-cli/crash-injection (scripts/test)"
 )]
 fn resumes_after_a_crash_mid_write_with_no_partial_file_left() {
     let tmp = tempfile::tempdir().unwrap();
@@ -394,7 +394,7 @@ fn two_concurrent_shards_make_the_unsharded_run_between_them() {
 #[test]
 #[cfg_attr(
     not(feature = "crash-injection"),
-    ignore = "the crash hook needs --features reynoldsflow-host/crash-injection (scripts/test)"
+    ignore = "the crash hook needs --features reynoldsflow-cli/crash-injection (scripts/test)"
 )]
 fn a_killed_shard_rerun_leaves_no_partial_file() {
     let tmp = tempfile::tempdir().unwrap();

@@ -761,7 +761,7 @@ fn one_frame_gives_no_result() {
 #[test]
 #[cfg_attr(
     not(feature = "crash-injection"),
-    ignore = "the crash hook needs --features reynoldsflow-host/crash-injection (scripts/test)"
+    ignore = "the crash hook needs --features reynoldsflow-cli/crash-injection (scripts/test)"
 )]
 fn a_run_killed_mid_write_is_cleaned_up() {
     let tmp = tempfile::tempdir().unwrap();

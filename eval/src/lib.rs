@@ -10,9 +10,9 @@
 //! [`plots`] (drawing), [`figures`] (what is drawn) and [`report`].
 //!
 //! ```no_run
-//! use reynoldsflow_eval::{self, protocol::EvalConfig};
+//! use reynoldsflow_eval::protocol::EvalConfig;
 //! # fn main() -> Result<(), reynoldsflow_host::HostError> {
-//! let summary = eval::run(&EvalConfig::quick(), std::path::Path::new("eval-out"))?;
+//! let summary = reynoldsflow_eval::run(&EvalConfig::quick(), std::path::Path::new("eval-out"))?;
 //! println!("{} files", summary.files.len());
 //! # Ok(()) }
 //! ```

@@ -392,7 +392,10 @@ mod tests {
         };
         assert!(matches!(
             compute(&a, &a, &zero),
-            Err(HostError::InvalidParameter { .. })
+            Err(HostError::Setting {
+                setting: Setting::Lambda,
+                ..
+            })
         ));
         let nan = FloatParams {
             intensity_scale: f64::NAN,
@@ -400,7 +403,10 @@ mod tests {
         };
         assert!(matches!(
             compute(&a, &a, &nan),
-            Err(HostError::InvalidParameter { .. })
+            Err(HostError::Setting {
+                setting: Setting::IntensityScale,
+                ..
+            })
         ));
     }
 
