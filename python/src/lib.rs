@@ -761,10 +761,32 @@ fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) 
 ///
 /// Compiled as `reynoldsflow._native`; the package's `__init__.py`
 /// re-exports all of it as `reynoldsflow`.
+/// The settings a call with these keywords computes with (engine, scale,
+/// intensity_scale, lam, tile, variant, hsv_max, layout), checked as every
+/// function checks them: ``settings()`` gives the defaults, which are
+/// ``DEFAULTS``, the library's own.
+#[pyfunction]
+#[pyo3(name = "settings", signature = (**options))]
+fn call_settings<'py>(
+    py: Python<'py>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    CallSettings::parse(Kwargs::new(py, "settings", options, settings::IMAGE_KEYS)?)?.to_dict(py)
+}
+
 #[pymodule]
 #[pyo3(name = "_native")]
 fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add(
+        "DEFAULTS",
+        settings::keywords(
+            m.py(),
+            &reynoldsflow_host::settings::Settings::default(),
+            Layout::default(),
+        )?,
+    )?;
+    m.add_function(wrap_pyfunction!(call_settings, m)?)?;
     m.add_function(wrap_pyfunction!(represent, m)?)?;
     m.add_function(wrap_pyfunction!(fields, m)?)?;
     m.add_function(wrap_pyfunction!(motion_score, m)?)?;

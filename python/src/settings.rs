@@ -284,6 +284,31 @@ impl Layout {
     }
 }
 
+/// `settings` under this API's keyword names, as plain Python values.
+pub fn keywords<'py>(
+    py: Python<'py>,
+    settings: &Settings,
+    layout: Layout,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("engine", settings.engine.name())?;
+    d.set_item("scale", settings.scale.to_string())?;
+    let s = settings.intensity_scale;
+    d.set_item("intensity_scale", format!("{}/{}", s.num(), s.den()))?;
+    d.set_item("lam", settings.lambda)?;
+    d.set_item("tile", settings.tile.map(|t| (t.width, t.height)))?;
+    d.set_item("variant", settings.variant.name())?;
+    d.set_item("hsv_max", settings.hsv_max)?;
+    d.set_item(
+        "layout",
+        match layout {
+            Layout::Hwc => "hwc",
+            Layout::Chw => "chw",
+        },
+    )?;
+    Ok(d)
+}
+
 /// A call's checked settings, and the layout of the images it returns.
 pub struct CallSettings {
     settings: Settings,
@@ -451,6 +476,11 @@ impl CallSettings {
         };
         call.compute()?;
         Ok(call)
+    }
+
+    /// The settings as keywords: `{"engine": "fixed", "lam": 0.0001, ...}`.
+    pub fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        keywords(py, &self.settings, self.layout)
     }
 
     /// The layout of returned images.

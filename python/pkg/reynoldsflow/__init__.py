@@ -34,6 +34,7 @@ Options shared by the computing functions (all keyword-only):
 # The compiled module (Rust, PyO3), re-exported whole: `reynoldsflow.X` is
 # `reynoldsflow._native.X`. Its types are in _native.pyi.
 from ._native import (
+    DEFAULTS as DEFAULTS,
     FrameReader as FrameReader,
     Stream as Stream,
     __version__ as __version__,
@@ -45,10 +46,12 @@ from ._native import (
     read_frames as read_frames,
     represent as represent,
     represent_clip as represent_clip,
+    settings as settings,
     write_flo as write_flo,
 )
 
 __all__ = [
+    "DEFAULTS",
     "FrameReader",
     "Stream",
     "convert",
@@ -59,5 +62,6 @@ __all__ = [
     "read_frames",
     "represent",
     "represent_clip",
+    "settings",
     "write_flo",
 ]

@@ -27,6 +27,37 @@ Path = Union[str, PathLike[str]]
 # the result's shape, a NumPy array or a CPU torch tensor; returned as given.
 Out = npt.NDArray[np.uint8]
 
+class Settings(TypedDict):
+    engine: Engine
+    scale: str
+    intensity_scale: str
+    lam: float
+    tile: Optional[Tuple[int, int]]
+    variant: Variant
+    hsv_max: Optional[float]
+    layout: Layout
+
+DEFAULTS: Settings
+"""The library's default settings (the Rust host's ``Settings::default()``),
+under this API's keyword names: what every function uses for a keyword not
+given."""
+
+def settings(
+    *,
+    engine: Engine = "fixed",
+    scale: Scale = "minmax",
+    intensity_scale: IntensityScale = ...,
+    lam: float = 1e-4,
+    tile: Optional[Tuple[int, int]] = None,
+    variant: Variant = "dc",
+    hsv_max: Optional[float] = None,
+    layout: Layout = "hwc",
+) -> Settings:
+    """The settings a call with these keywords computes with, checked as
+    every function checks them (a bad value raises the same ``ValueError``):
+    ``settings()`` is ``DEFAULTS``; ``settings(lam=1e-6)["intensity_scale"]``
+    is ``"1/255"``."""
+
 def represent(
     prev: Frame,
     next: Frame,
