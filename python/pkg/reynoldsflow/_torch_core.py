@@ -62,6 +62,33 @@ def _divide(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     return torch.div(a, b)
 
 
+def _sqrt(s: torch.Tensor) -> torch.Tensor:
+    """``√s`` of non-negative ``float32`` values, correctly rounded (IEEE's
+    ``squareRoot``, what the core's ``fpu::sqrt`` is on every target).
+
+    ``torch.sqrt`` is not that on every device: on the CPU it goes through
+    MKL's vector math, within one ulp but off by one for about 0.6 % of
+    values (CUDA's rounds correctly). So its root ``r`` is corrected by one
+    ulp where the exact root lies beyond the midpoint to a neighbour: with
+    ``n`` the neighbour, ``√s < (r + n) / 2`` exactly when
+    ``4·s < (r + n)²``, and in ``float64`` both sides are exact (``r + n``
+    of two adjacent ``float32`` has 25 bits, its square 50). No root lies
+    on a midpoint, so this is the correctly rounded root whenever
+    ``torch.sqrt`` is within one ulp (checked for every ``float32`` on the
+    CPU, ``python/tests``, and on CUDA, ``python/bench/gpu_check.py``).
+    """
+    r = torch.sqrt(s)
+    # The neighbours of r ≥ 0 by its bits (no neighbour below 0).
+    bits = r.view(torch.int32)
+    down = (bits - 1).clamp(min=0).view(torch.float32)
+    up = (bits + 1).view(torch.float32)
+    wide = torch.float64
+    s4, r64 = s.to(wide) * 4, r.to(wide)
+    low, high = down.to(wide) + r64, up.to(wide) + r64
+    r = torch.where(s4 < low * low, down, r)
+    return torch.where(s4 > high * high, up, r)
+
+
 def _tap(t: torch.Tensor, m: Margins, out: Margins, dy: int, dx: int) -> torch.Tensor:
     """The view of ``t`` (a stage on the frame plus margins ``m`` rows and
     columns either side) shifted by ``(dy, dx)``, over the frame plus
@@ -182,10 +209,10 @@ def _tail(
     n0 = c4 * p - b4 * q
     n1 = a4 * q - b4 * p
     inv = _divide(torch.full_like(det, k.v_d), det)
-    m_d = torch.sqrt(n0 * n0 + n1 * n1) * inv
+    m_d = _sqrt(n0 * n0 + n1 * n1) * inv
     unit_c = _f32(k.v_c, dev)
     vxf, vyf = vx.to(f32), vy.to(f32)
-    m_c = torch.sqrt(vxf * vxf + vyf * vyf) * unit_c
+    m_c = _sqrt(vxf * vxf + vyf * vyf) * unit_c
     fields = None
     if want_fields:
         fields = {
