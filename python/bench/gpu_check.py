@@ -238,27 +238,39 @@ def moving_clip(t: int, w: int, h: int) -> np.ndarray:
     return np.stack(frames)
 
 
-def timings(device: str, batches=(1, 16, 64), rounds: int = 3) -> None:
-    """Pairs per second at 640x480: represent_batch on ``device`` at each
-    batch size against the CPU core (one thread, every core), interleaved,
-    medians; the ratio to the core on every core."""
+def timings(device: str, rounds: int = 3) -> None:
+    """Pairs per second at 640x480: represent_batch on ``device`` (CUDA:
+    batches of 1, 16 and 64; the CPU: batches of 1 and 16 on one torch
+    thread, and 16 on every core) against the CPU core (one thread, every
+    core), interleaved, medians; the ratio to the core on every core."""
     frames = moving_clip(65, 640, 480)
     t = torch.from_numpy(frames).to(device)
     sync = torch.cuda.synchronize if device == "cuda" else (lambda: None)
+    cores = os.cpu_count() or 1
 
-    def torch_rate(b: int) -> float:
-        start = time.perf_counter()
-        represent_batch(t[:b], t[1:b + 1])
-        sync()
-        return b / (time.perf_counter() - start)
+    def torch_rate(b: int, threads: int) -> float:
+        before = torch.get_num_threads()
+        torch.set_num_threads(threads)
+        try:
+            start = time.perf_counter()
+            represent_batch(t[:b], t[1:b + 1])
+            sync()
+            return b / (time.perf_counter() - start)
+        finally:
+            torch.set_num_threads(before)
 
     def core_rate(threads: int) -> float:
         start = time.perf_counter()
         rf.represent_clip(frames, threads=threads, layout="chw")
         return 64 / (time.perf_counter() - start)
 
-    cores = os.cpu_count() or 1
-    runs = {f"represent_batch {device}, batch {b}": (lambda b=b: torch_rate(b)) for b in batches}
+    if device == "cuda":
+        cases = [(b, torch.get_num_threads()) for b in (1, 16, 64)]
+    else:
+        cases = [(1, 1), (16, 1), (16, cores)]
+    runs = {f"represent_batch {device}, batch {b}"
+            + ("" if device == "cuda" else f", {n} torch thread{'s' * (n > 1)}"):
+            (lambda b=b, n=n: torch_rate(b, n)) for b, n in cases}
     runs["core, 1 thread"] = lambda: core_rate(1)
     runs[f"core, {cores} threads"] = lambda: core_rate(cores)
     for run in runs.values():  # warm up
@@ -271,7 +283,7 @@ def timings(device: str, batches=(1, 16, 64), rounds: int = 3) -> None:
     print(f"640x480 pairs/s (median of {rounds}; ratio to the core on {cores} threads):")
     for name, r in rates.items():
         median = sorted(r)[rounds // 2]
-        print(f"  {name:<36} {median:9.1f}   {median / every:6.3f}", flush=True)
+        print(f"  {name:<48} {median:9.1f}   {median / every:6.3f}", flush=True)
 
 
 def main() -> int:
@@ -289,7 +301,7 @@ def main() -> int:
     if args.cpu_timings:
         print(f"torch {torch.__version__}, reynoldsflow {rf.__version__}, {os.cpu_count()} CPUs, "
               f"torch threads {torch.get_num_threads()}")
-        timings("cpu", batches=(1, 16))
+        timings("cpu")
         return 0
     if not torch.cuda.is_available():
         refuse("no CUDA device (torch.cuda.is_available() is False); run it on a machine with an "

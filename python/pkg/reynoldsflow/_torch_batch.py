@@ -81,7 +81,8 @@ def represent_batch(
 
     Pairs are computed in chunks of at most ``memory_budget`` bytes of
     working memory (default 1 GiB; a pair needs about
-    ``160 · (H + 14) · (W + 14)`` bytes, and a chunk holds at least one).
+    ``256 · (H + 14) · (W + 14)`` bytes, 83 MB at 640x480, and a chunk holds
+    at least one).
     """
     p0, p1 = _frames("prev", prev), _frames("next", next)
     if p0.shape != p1.shape:
