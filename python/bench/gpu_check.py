@@ -15,7 +15,8 @@ with the wheel installed, from the repository root,
 3. checks 1e8 CUDA divisions against the CPU's, drawn from the tail's
    ranges (v_d's unit over det in [Λ4², 2^62], 255 over min-max ranges
    from 1e-9 px);
-4. times represent_batch on CUDA at batches of 1, 16 and 64 pairs of
+4. checks its CUDA memory against the documented bound, and times
+   represent_batch on CUDA at batches of 1, 16 and 64 pairs of
    640x480 against the CPU core (represent_clip, one thread and every
    core), in pairs per second;
 
@@ -26,7 +27,8 @@ H100.
 
 ``--cpu-timings`` runs only step 4 with represent_batch on the CPU, and
 ``--cpu-sqrt`` only step 2 on the CPU (no CUDA needed for either): the
-figures of docs/python.md "On the GPU".
+figures of docs/python.md "On the GPU". ``--rehearse`` runs steps 1-3 on
+the CPU, smaller: the tests' run of this script's own code.
 """
 
 from __future__ import annotations
@@ -65,6 +67,9 @@ IMAGES = [
     {"scale": "fixed:0.5,2", "variant": "dc"},
 ]
 SIZES = [(1, 1), (1, 13), (11, 1), (5, 7), (16, 16), (31, 23), (48, 64), (97, 61), (120, 160), (2, 3)]
+
+# Where represent_batch runs: "cuda", or the CPU for --rehearse.
+DEVICE = "cuda"
 
 
 class Failures:
@@ -105,7 +110,7 @@ def read_pgm(path: Path) -> np.ndarray:
         fields.append(int(data[pos:end]))
         pos = end
     w, h, _ = fields
-    return np.frombuffer(data[pos + 1:pos + 1 + w * h], np.uint8).reshape(h, w)
+    return np.frombuffer(data[pos + 1:pos + 1 + w * h], np.uint8).reshape(h, w).copy()
 
 
 def bits(a) -> np.ndarray:
@@ -113,9 +118,9 @@ def bits(a) -> np.ndarray:
 
 
 def compare_batch(f0: np.ndarray, f1: np.ndarray, what: str, fails: Failures) -> None:
-    """Every setting of PARAMS × IMAGES on CUDA against the CPU core, for
+    """Every setting of PARAMS × IMAGES on DEVICE against the CPU core, for
     (B, H, W) pairs."""
-    t0, t1 = torch.from_numpy(f0).cuda(), torch.from_numpy(f1).cuda()
+    t0, t1 = torch.from_numpy(f0).to(DEVICE), torch.from_numpy(f1).to(DEVICE)
     for params in PARAMS:
         for image in IMAGES:
             rgb, fields = represent_batch(t0, t1, fields=True, **params, **image)
@@ -139,7 +144,7 @@ def check_golden(fails: Failures) -> int:
         compare_batch(f0, f1, case, fails)
         h, w = f0.shape[1:]
         planes = np.frombuffer((REPO / "tests" / "golden" / case / "fields.bin").read_bytes(), "<f4")
-        _, got = represent_batch(torch.from_numpy(f0).cuda(), torch.from_numpy(f1).cuda(), fields=True)
+        _, got = represent_batch(torch.from_numpy(f0).to(DEVICE), torch.from_numpy(f1).to(DEVICE), fields=True)
         got = torch.cat([got["v_c"][0], got["v_d"][0], got["m_c"], got["m_d"]]).cpu().numpy()
         fails.check(np.array_equal(bits(got), bits(planes.reshape(6, h, w))), f"{case} fields.bin")
     return len(cases)
@@ -180,14 +185,14 @@ def check_generated(fails: Failures, count: int = 1000) -> int:
     return per_size * len(SIZES)
 
 
-def check_sqrt(fails: Failures, device: str = "cuda") -> int:
+def check_sqrt(fails: Failures, device: str = "cuda", end: int = 0x7F800000) -> int:
     """On every non-negative finite float32, against IEEE's correctly
     rounded root (NumPy's: the CPU's sqrt instruction): represent_batch's
     root (``_torch_core._sqrt``) must be equal; ``torch.sqrt`` is counted,
     and must be equal on CUDA (on the CPU, MKL's is not, by one ulp)."""
     from reynoldsflow._torch_core import _sqrt
 
-    end, step = 0x7F800000, 1 << 25
+    step = min(end, 1 << 25)
     raw = 0
     for start in range(0, end, step):
         pattern = np.arange(start, min(end, start + step), dtype=np.int32)
@@ -212,19 +217,47 @@ def check_divisions(fails: Failures, total: int = 100_000_000) -> int:
     units = [core_constants(**p).v_d for p in PARAMS] + [255.0]
     as_bits = lambda x: int(np.array(x, np.float32).view(np.int32))
     spans = [(as_bits(1.0), as_bits(2.0**62)), (as_bits(1e-9), as_bits(2.0**20))]
-    g = torch.Generator(device="cuda").manual_seed(49)
-    chunk, done = 10_000_000, 0
+    g = torch.Generator(device=DEVICE).manual_seed(49)
+    chunk, done = min(total, 10_000_000), 0
     while done < total:
         n = min(chunk, total - done)
         lo, hi = spans[done // chunk % 2]
-        den = torch.randint(lo, hi, (n,), device="cuda", generator=g, dtype=torch.int32).view(torch.float32)
-        num = torch.tensor(units, device="cuda")[torch.randint(0, len(units), (n,), device="cuda", generator=g)]
+        den = torch.randint(lo, hi, (n,), device=DEVICE, generator=g, dtype=torch.int32).view(torch.float32)
+        pick = torch.randint(0, len(units), (n,), device=DEVICE, generator=g)
+        num = torch.tensor(units, device=DEVICE)[pick]
         got = torch.div(num, den).cpu()
         want = torch.div(num.cpu(), den.cpu())
         differ = int((got.view(torch.int32) != want.view(torch.int32)).count_nonzero())
         fails.check(differ == 0, f"division: {differ} of {n}")
         done += n
     return total
+
+
+def check_memory(fails: Failures) -> int:
+    """represent_batch's CUDA memory against its bound: one 640x480 pair
+    (fields too) within WORKING_BYTES_PER_PIXEL of its padded frames, and
+    16 pairs within the default budget plus their results."""
+    from reynoldsflow import _torch_batch, _torch_core
+
+    frames = torch.from_numpy(moving_clip(17, 640, 480)).cuda()
+
+    def peak(b: int, fields: bool) -> int:
+        torch.cuda.synchronize()
+        torch.cuda.reset_peak_memory_stats()
+        before = torch.cuda.memory_allocated()
+        result = represent_batch(frames[:b], frames[1:b + 1], fields=fields)
+        torch.cuda.synchronize()
+        del result
+        return torch.cuda.max_memory_allocated() - before
+
+    one = peak(1, True) / ((480 + 14) * (640 + 14))
+    print(f"  one pair: {one:.0f} bytes a padded pixel (bound {_torch_core.WORKING_BYTES_PER_PIXEL})", flush=True)
+    fails.check(one <= _torch_core.WORKING_BYTES_PER_PIXEL, f"one pair takes {one:.0f} bytes a padded pixel")
+    sixteen = peak(16, False)
+    bound = _torch_batch.DEFAULT_MEMORY_BUDGET + 16 * 3 * 480 * 640
+    print(f"  16 pairs: {sixteen / 2**20:.0f} MiB (bound {bound / 2**20:.0f} MiB)", flush=True)
+    fails.check(sixteen <= bound, f"16 pairs take {sixteen} bytes")
+    return 17
 
 
 def moving_clip(t: int, w: int, h: int) -> np.ndarray:
@@ -290,6 +323,8 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--cpu-timings", action="store_true", help="only the timings, represent_batch on the CPU")
     p.add_argument("--cpu-sqrt", action="store_true", help="only the square roots, on the CPU")
+    p.add_argument("--rehearse", action="store_true",
+                   help="the CUDA path's comparisons on the CPU, smaller (tests this script; checks no GPU)")
     args = p.parse_args()
     if args.cpu_sqrt:
         fails = Failures()
@@ -303,19 +338,31 @@ def main() -> int:
               f"torch threads {torch.get_num_threads()}")
         timings("cpu")
         return 0
-    if not torch.cuda.is_available():
+    global DEVICE
+    if args.rehearse:
+        # The steps below on the CPU, smaller: a test of this script where
+        # there is no GPU, not a check of one.
+        DEVICE = "cpu"
+        steps = [("golden pairs", check_golden), ("generated pairs", lambda f: check_generated(f, 70)),
+                 ("sqrt patterns", lambda f: check_sqrt(f, "cpu", 1 << 22)),
+                 ("divisions", lambda f: check_divisions(f, 1_000_000))]
+    elif not torch.cuda.is_available():
         refuse("no CUDA device (torch.cuda.is_available() is False); run it on a machine with an "
                "NVIDIA GPU and a CUDA build of torch (--cpu-timings times the CPU path only)")
-    versions()
+    else:
+        versions()
+        steps = [("golden pairs", check_golden), ("generated pairs", check_generated),
+                 ("sqrt patterns", check_sqrt), ("divisions", check_divisions),
+                 ("memory, frames", check_memory)]
     fails = Failures()
     started = time.perf_counter()
-    for name, step in [("golden pairs", check_golden), ("generated pairs", check_generated),
-                       ("sqrt patterns", check_sqrt), ("divisions", check_divisions)]:
+    for name, step in steps:
         before = fails.count
         n = step(fails)
         print(f"{name}: {n}, {'equal' if fails.count == before else 'DIFFERENT'} "
               f"({time.perf_counter() - started:.0f} s)", flush=True)
-    timings("cuda")
+    if not args.rehearse:
+        timings("cuda")
     print(f"total {time.perf_counter() - started:.0f} s; "
           f"{'every value equal' if fails.count == 0 else f'{fails.count} differences'}")
     return 0 if fails.count == 0 else 1

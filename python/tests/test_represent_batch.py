@@ -269,12 +269,29 @@ def test_transform_on_a_device_gives_the_core_bytes():
         ReynoldsFlow(device="cpu")(frames[:1])
 
 
-def test_gpu_check_refuses_without_cuda():
-    script = Path(__file__).resolve().parents[1] / "bench" / "gpu_check.py"
+GPU_CHECK = Path(__file__).resolve().parents[1] / "bench" / "gpu_check.py"
+
+
+def run_gpu_check(*args: str) -> subprocess.CompletedProcess:
     env = dict(os.environ, CUDA_VISIBLE_DEVICES="")
-    res = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=120)
+    return subprocess.run([sys.executable, str(GPU_CHECK), *args], capture_output=True, text=True,
+                          env=env, timeout=300)
+
+
+def test_gpu_check_refuses_without_cuda():
+    res = run_gpu_check()
     assert res.returncode == 2, res.stdout + res.stderr
-    assert "no CUDA device" in res.stderr
+    assert "no CUDA device" in res.stderr and res.stdout == ""
+
+
+def test_gpu_check_rehearsed_on_the_cpu_finds_every_value_equal():
+    """The script's own comparisons, run on the CPU (--rehearse), so its
+    CUDA path's code is exercised where there is no GPU."""
+    res = run_gpu_check("--rehearse")
+    assert res.returncode == 0, res.stdout + res.stderr
+    for step in ["golden pairs: 11, equal", "generated pairs: 70, equal", "divisions: 1000000, equal",
+                 "sqrt patterns: 4194304, equal", "every value equal"]:
+        assert step in res.stdout, res.stdout
 
 
 def test_the_square_root_is_correctly_rounded():
