@@ -11,8 +11,9 @@ Exact by construction, on the CPU and on CUDA:
   after which every stage reads shifted views (no padding of intermediate
   fields: the core computes them as if the frame extended without end);
 - every ``float32`` value is made by one eager ``add``, ``sub``, ``mul``,
-  ``div``, ``sqrt``, ``where`` or ``to`` at a time, in the core's order
-  (one kernel, one IEEE rounding; nothing to fuse inside it);
+  ``div``, ``where`` or ``to`` at a time, in the core's order (one kernel,
+  one IEEE rounding; nothing to fuse inside it), or by :func:`_sqrt`, the
+  correctly rounded root (``torch.sqrt`` is not, on the CPU);
 - every ``float32`` constant is a tensor on the frames' device, and every
   division goes through :func:`_divide`, whose divisor is a full tensor
   there: CUDA divides by a CPU scalar as ``a * (1 / b)``, and
@@ -22,9 +23,10 @@ Exact by construction, on the CPU and on CUDA:
   reordering would change), and no ``torch.compile``; the per-frame
   extremes are ``amin``/``amax``, exact in any order.
 
-``python/tests/test_represent_batch.py`` lints this module's syntax tree
-for those operations; ``python/bench/gpu_check.py`` checks the bytes on a
-GPU.
+``python/tests/test_torch_core_lint.py`` lints this module's syntax tree
+for those operations, ``python/tests/test_represent_batch.py`` compares
+its results with the core's, and ``python/bench/gpu_check.py`` does so on
+a GPU.
 """
 
 from __future__ import annotations
@@ -51,7 +53,9 @@ Margins = Tuple[int, int]
 
 
 def _f32(value: float, device: torch.device) -> torch.Tensor:
-    """A ``float32`` constant on ``device`` (``value`` is one exactly)."""
+    """A ``float32`` constant on ``device``: ``value`` rounded to
+    ``float32`` (each one here is a ``float32`` already, or, ``1e-9``, rounds
+    to the same ``float32`` as the core's literal)."""
     return torch.tensor(value, dtype=torch.float32, device=device)
 
 
@@ -75,8 +79,9 @@ def _sqrt(s: torch.Tensor) -> torch.Tensor:
     ``4·s < (r + n)²``, and in ``float64`` both sides are exact (``r + n``
     of two adjacent ``float32`` has 25 bits, its square 50). No root lies
     on a midpoint, so this is the correctly rounded root whenever
-    ``torch.sqrt`` is within one ulp (checked for every ``float32`` on the
-    CPU, ``python/tests``, and on CUDA, ``python/bench/gpu_check.py``).
+    ``torch.sqrt`` is within one ulp (checked on every ``float32``:
+    ``python/bench/gpu_check.py --cpu-sqrt`` on the CPU, and without the
+    flag on CUDA).
     """
     r = torch.sqrt(s)
     # The neighbours of r ≥ 0 by its bits (no neighbour below 0).
