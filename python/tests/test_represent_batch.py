@@ -19,6 +19,16 @@ from reynoldsflow.torch import ReynoldsFlow, represent_batch
 from conftest import clip, moving_frame, read_gray, read_png
 
 SMALL = {"intensity_scale": 1 / 1024, "lam": 1e-6}
+
+
+@pytest.fixture(autouse=True)
+def one_torch_thread():
+    """The tensors here are small: one thread computes them faster than
+    two, which wait on each other (and, on a busy machine, much longer)."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
 PARAMS = [{}, SMALL]
 # Every scaling with every variant would repeat the same tail: each
 # variant with each scaling is enough to tell them apart.
@@ -273,7 +283,7 @@ GPU_CHECK = Path(__file__).resolve().parents[1] / "bench" / "gpu_check.py"
 
 
 def run_gpu_check(*args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, CUDA_VISIBLE_DEVICES="")
+    env = dict(os.environ, CUDA_VISIBLE_DEVICES="", OMP_NUM_THREADS="1")
     return subprocess.run([sys.executable, str(GPU_CHECK), *args], capture_output=True, text=True,
                           env=env, timeout=300)
 
