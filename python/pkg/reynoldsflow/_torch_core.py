@@ -55,8 +55,9 @@ Margins = Tuple[int, int]
 def _f32(value: float, device: torch.device) -> torch.Tensor:
     """A ``float32`` constant on ``device``: ``value`` rounded to
     ``float32`` (each one here is a ``float32`` already, or, ``1e-9``, rounds
-    to the same ``float32`` as the core's literal)."""
-    return torch.tensor(value, dtype=torch.float32, device=device)
+    to the same ``float32`` as the core's literal). A fill on the device,
+    not a copy from the host (which on CUDA waits for the queue)."""
+    return torch.full((), value, dtype=torch.float32, device=device)
 
 
 def _divide(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
