@@ -36,8 +36,10 @@ import numpy
 
 import reynoldsflow as _rf
 from reynoldsflow import _slots
+from reynoldsflow._core_params import SETTING_KEYS as _SETTING_KEYS, core_constants as _core_constants
+from reynoldsflow._torch_batch import represent_batch
 
-__all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "collate", "shard_of_this_process"]
+__all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "collate", "represent_batch", "shard_of_this_process"]
 
 # The keywords of the frames taken (read_frames / represent_clip).
 _FRAME_KEYS = ("step", "fps", "resize", "short_side")
@@ -81,13 +83,35 @@ class ReynoldsFlow:
     ``variant``, ``step``, ``resize``, ...). ``threads`` defaults to every
     core in the main process and to 1 inside a ``DataLoader`` worker. The
     input is read in place (no copy) whatever its strides.
+
+    ``device`` (e.g. ``"cuda"``): the clip is moved there and computed
+    there by :func:`represent_batch` (the same bytes), the result left
+    there; it takes ``represent_batch``'s settings and ``keep_count``.
     """
 
-    def __init__(self, *, threads: Optional[int] = None, **options: Any) -> None:
+    def __init__(
+        self,
+        *,
+        threads: Optional[int] = None,
+        device: Union[None, str, "torch.device"] = None,
+        **options: Any,
+    ) -> None:
         if "layout" in options:
             raise TypeError("ReynoldsFlow() returns channels first; it takes no layout")
         self.threads = threads
         self.options = options
+        self.device = None if device is None else torch.device(device)
+        if self.device is not None:
+            other = sorted(set(options) - set(_SETTING_KEYS) - {"keep_count"})
+            if other or threads is not None:
+                raise ValueError(
+                    f"ReynoldsFlow(device=...) takes represent_batch's settings and keep_count; "
+                    f"not {', '.join(other or ['threads'])}"
+                )
+            _core_constants(**self._settings())  # a bad setting raises here
+
+    def _settings(self) -> Dict[str, Any]:
+        return {k: v for k, v in self.options.items() if k != "keep_count"}
 
     def __call__(self, frames: "torch.Tensor") -> "torch.Tensor":
         if not isinstance(frames, torch.Tensor):
@@ -105,10 +129,20 @@ class ReynoldsFlow:
             )
         if frames.dtype != torch.uint8:
             raise TypeError(f"ReynoldsFlow: expected a uint8 clip, got {frames.dtype}")
+        if self.device is not None:
+            return self._on_device(frames.to(self.device))
         reps = _rf.represent_clip(
             frames, layout="chw", threads=_threads_here(self.threads), **self.options
         )
         return torch.from_numpy(reps)
+
+    def _on_device(self, frames: "torch.Tensor") -> "torch.Tensor":
+        if frames.shape[0] < 2:
+            raise ValueError(f"ReynoldsFlow: a clip of {frames.shape[0]} frames; expected at least 2")
+        reps = represent_batch(frames[:-1], frames[1:], **self._settings())
+        if self.options.get("keep_count"):
+            reps = torch.cat([reps, reps[-1:]])
+        return reps
 
     def __repr__(self) -> str:
         options = ", ".join(f"{k}={v!r}" for k, v in sorted(self.options.items()))

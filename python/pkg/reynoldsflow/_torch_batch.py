@@ -1,0 +1,117 @@
+"""``represent_batch``: the core's representation of batches of frame pairs
+held as tensors on any device, computed there (``_torch_core``), checked
+and cut into chunks that bound the working memory."""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Optional, Tuple, Union
+
+import torch
+
+from . import _torch_core
+from ._core_params import SETTING_KEYS, core_constants
+
+# The largest frame side the core takes (params.rs MAX_SIDE).
+MAX_SIDE = 65535
+
+# Default working memory of one chunk of pairs, in bytes.
+DEFAULT_MEMORY_BUDGET = 1 << 30
+
+Fields = Dict[str, torch.Tensor]
+
+
+def _frames(name: str, t: Any) -> torch.Tensor:
+    """``t`` as ``(B, H, W)`` uint8 (a view), or the error naming it."""
+    if not isinstance(t, torch.Tensor):
+        raise TypeError(f"represent_batch: {name}: expected a torch.Tensor, got {type(t).__name__}")
+    if t.dtype != torch.uint8:
+        raise TypeError(f"represent_batch: {name}: expected uint8 frames, got {t.dtype}")
+    if t.dim() == 4:
+        if t.shape[1] != 1:
+            raise ValueError(
+                f"represent_batch: {name}: a 4-D batch must be (B, 1, H, W) (one gray channel); "
+                f"got shape {tuple(t.shape)}"
+            )
+        t = t[:, 0]
+    elif t.dim() != 3:
+        raise TypeError(
+            f"represent_batch: {name}: expected (B, H, W) or (B, 1, H, W) frames, "
+            f"got {t.dim()} dimensions"
+        )
+    h, w = t.shape[1:]
+    if not (1 <= h <= MAX_SIDE and 1 <= w <= MAX_SIDE):
+        raise ValueError(
+            f"represent_batch: {name}: frames of {w}x{h}; each side must be 1 to {MAX_SIDE} pixels"
+        )
+    return t
+
+
+def chunk_pairs(height: int, width: int, memory_budget: int) -> int:
+    """How many pairs of ``height × width`` one chunk computes at once:
+    the budget over the working bytes of a pair (``_torch_core``), at
+    least one."""
+    pixels = (height + 2 * _torch_core.HALO) * (width + 2 * _torch_core.HALO)
+    return max(1, divmod(memory_budget, pixels * _torch_core.WORKING_BYTES_PER_PIXEL)[0])
+
+
+def represent_batch(
+    prev: torch.Tensor,
+    next: torch.Tensor,
+    *,
+    fields: bool = False,
+    memory_budget: int = DEFAULT_MEMORY_BUDGET,
+    **settings: Any,
+) -> Union[torch.Tensor, Tuple[torch.Tensor, Fields]]:
+    """The representation of every pair ``(prev[i], next[i])``: a
+    ``(B, 3, H, W)`` uint8 tensor on the frames' device whose image ``i`` is
+    ``reynoldsflow.represent(prev[i], next[i], layout="chw", **settings)``
+    byte for byte, on any device (the core's integer and ``float32``
+    arithmetic in eager tensor operations, see ``docs/python.md``).
+
+    ``prev``, ``next``: ``(B, H, W)`` or ``(B, 1, H, W)`` uint8 tensors of one
+    shape on one device, any strides. ``settings``: ``represent``'s
+    ``scale``, ``intensity_scale``, ``lam``, ``variant`` (``"dc"``,
+    ``"dc0"``, ``"cd"``; ``"hsv"`` raises ``ValueError``), ``engine``
+    (``"fixed"`` only) and ``tile`` (no effect on the bytes).
+
+    With ``fields=True``, returns ``(rgb, fields)``: ``fields["v_c"]`` and
+    ``fields["v_d"]`` ``(B, 2, H, W)`` float32 (x, y in pixels) and
+    ``fields["m_c"]``, ``fields["m_d"]`` ``(B, H, W)`` float32 (their
+    magnitudes), each the core's ``float32`` values bit for bit.
+
+    Pairs are computed in chunks of at most ``memory_budget`` bytes of
+    working memory (default 1 GiB; a pair needs about
+    ``256 · (H + 14) · (W + 14)`` bytes, 83 MB at 640x480, and a chunk holds
+    at least one).
+    """
+    p0, p1 = _frames("prev", prev), _frames("next", next)
+    if p0.shape != p1.shape:
+        raise ValueError(
+            f"represent_batch: next: shape {tuple(next.shape)} differs from prev's {tuple(prev.shape)}"
+        )
+    if p0.device != p1.device:
+        raise ValueError(f"represent_batch: next: on {p1.device}, prev on {p0.device}; give both on one device")
+    for key in settings:
+        if key not in SETTING_KEYS:
+            raise TypeError(f"represent_batch() got an unexpected keyword argument '{key}'")
+    if not isinstance(memory_budget, int) or memory_budget < 1:
+        raise ValueError(f"represent_batch: memory_budget = {memory_budget!r}; expected a positive number of bytes")
+    k = core_constants(**settings)
+    b, h, w = p0.shape
+    rgb = torch.empty((b, 3, h, w), dtype=torch.uint8, device=p0.device)
+    parts = []
+    step = chunk_pairs(h, w, memory_budget)
+    with torch.no_grad():
+        for start in range(0, b, step):
+            stop = min(b, start + step)
+            part = _torch_core.represent_pairs(p0[start:stop], p1[start:stop], k, rgb[start:stop], fields)
+            parts.append(part)
+    if not fields:
+        return rgb
+    if len(parts) == 1:
+        return rgb, parts[0]
+    if b == 0:
+        empty = torch.empty((0, 2, h, w), dtype=torch.float32, device=p0.device)
+        flat = torch.empty((0, h, w), dtype=torch.float32, device=p0.device)
+        return rgb, {"v_c": empty, "v_d": empty.clone(), "m_c": flat, "m_d": flat.clone()}
+    return rgb, {name: torch.cat([part[name] for part in parts]) for name in parts[0]}
