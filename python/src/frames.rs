@@ -48,7 +48,17 @@ pub fn ndarray<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, 
     let numpy = py.import("numpy")?;
     let converted = if obj.hasattr("__dlpack__")? {
         if obj.hasattr("__dlpack_device__")? {
-            let (device, id): (i64, i64) = obj.call_method0("__dlpack_device__")?.extract()?;
+            // A device DLPack has no number for (torch's "meta") is no host memory either.
+            let (device, id): (i64, i64) = obj
+                .call_method0("__dlpack_device__")
+                .and_then(|d| d.extract())
+                .map_err(|e| {
+                    PyTypeError::new_err(format!(
+                        "{name}: a {} on a device DLPack cannot name ({e}), not in host memory; \
+                         give a CPU array",
+                        type_name()
+                    ))
+                })?;
             if !HOST_DEVICES.contains(&device) {
                 return Err(PyTypeError::new_err(format!(
                     "{name}: a {} on DLPack device ({device}, {id}), not in host memory; \

@@ -371,6 +371,11 @@ fn sized(frame: Gray, plan: &FramePlan) -> Result<Gray, HostError> {
 /// None for the first frame, then the representation of (previous frame,
 /// this frame), the same bytes as represent. Frames are (height, width) or
 /// (height, width, 1) uint8 arrays.
+///
+/// A Stream holds its previous frame: use each one from one thread at a
+/// time (one per camera); a push from a second thread while another runs
+/// raises RuntimeError ("Already borrowed"). A frame that another thread
+/// changes during push (which releases the GIL) gives undefined bytes.
 #[pyclass(module = "reynoldsflow")]
 struct Stream {
     width: usize,
@@ -399,6 +404,16 @@ impl Stream {
                 "Stream: {width}x{height}: width and height must be at least 1"
             )));
         }
+        // Refused when made, not at the first push: a side the core cannot
+        // hold, or more pixels than a frame may have.
+        if width > reynoldsflow_core::MAX_SIDE || height > reynoldsflow_core::MAX_SIDE {
+            return Err(value_error(format!(
+                "Stream: {width}x{height}: a side exceeds {} pixels, the engine's largest",
+                reynoldsflow_core::MAX_SIDE
+            )));
+        }
+        reynoldsflow_host::limits::check_frame_size(width, height)
+            .map_err(|e| value_error(format!("Stream: {e}")))?;
         Ok(Self {
             width,
             height,

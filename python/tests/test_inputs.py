@@ -163,3 +163,19 @@ def test_flo_round_trip_and_cli_flo(cli, tmp_path):
     write_pgm(frames / "b.pgm", f1)
     run_cli(cli, "run", frames, "--out", tmp_path / "out", "--flo")
     assert np.array_equal(rf.read_flo(tmp_path / "out" / "v_R" / "a.flo"), rf.fields(f0, f1)["v_R"])
+
+
+def test_a_stream_too_large_for_the_engine_is_refused_when_made():
+    for w, h in [(2**40, 2**40), (70000, 1), (1, 70000)]:
+        with pytest.raises(ValueError, match="Stream"):
+            rf.Stream(w, h)
+
+
+def test_a_meta_tensor_is_the_modules_type_error():
+    import torch
+
+    meta = torch.empty(8, 8, dtype=torch.uint8, device="meta")
+    cpu = torch.zeros(8, 8, dtype=torch.uint8)
+    for call in (lambda: rf.represent(meta, cpu), lambda: rf.represent(cpu, meta), lambda: rf.Stream(8, 8).push(meta)):
+        with pytest.raises(TypeError, match="not in host memory"):
+            call()

@@ -53,3 +53,4 @@ def test_a_host_setting_error_names_the_python_keyword_not_a_flag():
         rf.represent(a, a, lam=1e9)
     assert str(e.value).startswith("lam: "), e.value
     assert "--" not in str(e.value)
+

@@ -8,8 +8,14 @@ or the array interface (PyTorch tensors, ...), read in place without a
 copy. ``reynoldsflow.torch`` (with PyTorch installed) has a transform and
 an ``IterableDataset``. A wrong type, dtype or number of dimensions raises ``TypeError``;
 a wrong shape or parameter value ``ValueError``; a file that cannot be
-read ``OSError`` (``FileNotFoundError``, ...). The GIL is released while
-computing, so threads compute in parallel.
+read ``OSError`` (``FileNotFoundError``, ...); an array that is not in
+host memory (a CUDA or ``"meta"`` tensor) ``TypeError``. The GIL is
+released while computing, so threads compute in parallel; an input that
+another thread changes during a call gives undefined bytes (hold it
+unchanged until the call returns), and a ``Stream`` pushed to from two
+threads at once raises ``RuntimeError`` ("Already borrowed").
+``DEFAULTS`` holds the defaults below, ``settings(**options)`` what a call
+with those options uses.
 
 Options shared by the computing functions (all keyword-only):
 
