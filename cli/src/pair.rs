@@ -53,9 +53,9 @@ pub fn run(args: &PairArgs) -> Result<(), HostError> {
     })?;
 
     let p = &output.planes;
-    let npy = |data: &[f64]| npy::encode(p.height, p.width, data);
-    let (vcx, vcy, vdx, vdy) = (npy(&p.vcx), npy(&p.vcy), npy(&p.vdx), npy(&p.vdy));
-    let png = image_io::encode_png(p.width, p.height, &output.rep)?;
+    let npy = |data: &[f64]| npy::encode(p.height(), p.width(), data);
+    let (vcx, vcy, vdx, vdy) = (npy(&p.v_c.u), npy(&p.v_c.v), npy(&p.v_d.u), npy(&p.v_d.v));
+    let png = image_io::encode_png(p.width(), p.height(), &output.rep)?;
     let files: [(&str, &[u8]); 5] = [
         ("vcx.npy", &vcx),
         ("vcy.npy", &vcy),

@@ -131,7 +131,7 @@ fn folder_run_equals_pair_on_every_pair() {
                     flo::decode(&fs::read(out.join(field).join(format!("{stem}.flo"))).unwrap())
                         .unwrap();
                 assert_eq!((f.width, f.height), (W, H));
-                let as32 = |v: &[f64]| v.iter().map(|&a| a as f32).collect::<Vec<_>>();
+                let as32 = |v: &[f64]| v.iter().map(|&a| f64::from(a as f32)).collect::<Vec<_>>();
                 assert!(
                     f.u == as32(&x) && f.v == as32(&y),
                     "{engine} {stem} {field}.flo"

@@ -3,7 +3,8 @@
 //! Conventions as everywhere here: x right, y down, flow = displacement of a
 //! pixel of frame n to frame n + 1.
 
-use super::field::{Flow, Plane};
+use super::field::Plane;
+use reynoldsflow_host::Flow;
 use reynoldsflow_host::Gray;
 
 /// Horn & Schunck (1981): global smoothness. The flow is the fixed point

@@ -144,48 +144,6 @@ impl Plane {
     }
 }
 
-/// A dense displacement field: pixel `(x, y)` of frame n moves by
-/// `(u, v)` to frame n + 1; x to the right, y downward, in pixels.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Flow {
-    /// Columns.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// x components, row-major.
-    pub u: Vec<f64>,
-    /// y components, row-major.
-    pub v: Vec<f64>,
-}
-
-impl Flow {
-    /// The zero field.
-    pub fn zeros(width: usize, height: usize) -> Self {
-        Self {
-            width,
-            height,
-            u: vec![0.0; width * height],
-            v: vec![0.0; width * height],
-        }
-    }
-
-    /// A field from its two component planes (equal lengths).
-    pub fn from_parts(width: usize, height: usize, u: Vec<f64>, v: Vec<f64>) -> Self {
-        assert!(u.len() == width * height && v.len() == width * height);
-        Self {
-            width,
-            height,
-            u,
-            v,
-        }
-    }
-
-    /// The vector at row-major index `i`.
-    pub fn at(&self, i: usize) -> [f64; 2] {
-        [self.u[i], self.v[i]]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

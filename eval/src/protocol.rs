@@ -7,10 +7,10 @@ use std::time::{Duration, Instant};
 use reynoldsflow_core::{Params, Scaling};
 
 use super::baselines::{HornSchunck, LucasKanade};
-use super::field::Flow;
 use super::metrics;
 use super::scenes::{Pattern, Scenario, SceneSpec, Sequence};
 use super::truth::{self, Pose};
+use reynoldsflow_host::Flow;
 use reynoldsflow_host::reference::{self, FloatFlow, FloatParams, FloatScaling};
 use reynoldsflow_host::{Gray, HostError, fixed_engine, workers};
 
@@ -255,10 +255,6 @@ fn gather(flow: &Flow, idx: &[usize]) -> Vec<[f64; 2]> {
     idx.iter().map(|&i| flow.at(i)).collect()
 }
 
-fn flow_of(w: usize, h: usize, x: &[f64], y: &[f64]) -> Flow {
-    Flow::from_parts(w, h, x.to_vec(), y.to_vec())
-}
-
 /// Render and evaluate one sequence.
 fn evaluate_sequence(
     config: &EvalConfig,
@@ -310,22 +306,19 @@ fn evaluate_sequence(
         let rf_small = reference::compute(prev, next, &small)?;
         clock(Method::RfVrSmallScale, t);
 
-        let (vrx, vry) = rf.v_r();
-        let (fx, fy) = fixed.planes.v_r();
-        let fixed_vr = Flow::from_parts(w, h, fx, fy);
-        let vr = Flow::from_parts(w, h, vrx, vry);
+        let vr = rf.v_r();
+        let fixed_vr = fixed.planes.v_r();
         let fixed_max_diff = (0..w * h)
             .map(|i| (fixed_vr.u[i] - vr.u[i]).hypot(fixed_vr.v[i] - vr.v[i]))
             .fold(0.0, f64::max);
-        let (sx, sy) = rf_small.v_r();
         let estimates = [
             (Method::HornSchunck, hs),
             (Method::LucasKanade, lk),
             (Method::RfVr, vr),
-            (Method::RfVd, flow_of(w, h, &rf.vdx, &rf.vdy)),
-            (Method::RfVc, flow_of(w, h, &rf.vcx, &rf.vcy)),
+            (Method::RfVd, rf.v_d.clone()),
+            (Method::RfVc, rf.v_c.clone()),
             (Method::RfVrFixed, fixed_vr),
-            (Method::RfVrSmallScale, Flow::from_parts(w, h, sx, sy)),
+            (Method::RfVrSmallScale, rf_small.v_r()),
         ];
 
         let sparse = sparse_points(&spec, &seq.poses[n]);

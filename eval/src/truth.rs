@@ -3,7 +3,7 @@
 //! between two poses, and the pixels the metrics are taken at (sparse
 //! points and the dense interior).
 
-use super::field::Flow;
+use reynoldsflow_host::Flow;
 
 /// Where the scene plane lands in frame n: `x = c + s·R(θ)·(p − c) + t`,
 /// with `c` the frame centre, `s` the zoom, `θ` the rotation (positive turns

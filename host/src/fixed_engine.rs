@@ -20,7 +20,7 @@ use reynoldsflow_core::{
 
 use crate::dispatch::{self, Isa, Pass};
 use crate::page_buffer::{ByteBuffer, PageBuffer};
-use crate::{FlowPlanes, Gray, HostError, workers};
+use crate::{Flow, FlowPlanes, Gray, HostError, workers};
 
 /// The widest of the host's default tiles: full-height strips of at most
 /// 1 280 columns (windows of 1 294, 409 KiB of working memory, inside a
@@ -208,12 +208,8 @@ fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> Fi
     let plane = |f: &dyn Fn(&FlowPixel) -> f32| pixels.iter().map(|p| f64::from(f(p))).collect();
     FixedOutput {
         planes: FlowPlanes {
-            width,
-            height,
-            vcx: plane(&|p| p.v_c[0]),
-            vcy: plane(&|p| p.v_c[1]),
-            vdx: plane(&|p| p.v_d[0]),
-            vdy: plane(&|p| p.v_d[1]),
+            v_c: Flow::from_parts(width, height, plane(&|p| p.v_c[0]), plane(&|p| p.v_c[1])),
+            v_d: Flow::from_parts(width, height, plane(&|p| p.v_d[0]), plane(&|p| p.v_d[1])),
         },
         m_d: plane(&|p| p.m_d),
         m_c: plane(&|p| p.m_c),

@@ -29,7 +29,7 @@ mod decoder_guard;
 pub mod dispatch;
 mod error;
 pub mod fixed_engine;
-pub mod flow_planes;
+pub mod flow;
 pub mod gray;
 pub mod image_io;
 pub mod limits;
@@ -47,5 +47,5 @@ pub mod workers;
 
 pub use decoder_guard::panic_message;
 pub use error::{HostError, ImageProblem};
-pub use flow_planes::FlowPlanes;
+pub use flow::{Flow, FlowPlanes};
 pub use gray::{Gray, luma_bt601};

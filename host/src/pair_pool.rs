@@ -14,7 +14,7 @@ use crate::fixed_engine::{self, MAX_STRIP_WIDTH};
 use crate::outputs::{OutputSpec, PairFields, Variant};
 use crate::pipeline::{self, Compute};
 use crate::settings::{EngineKind, ScaleArg};
-use crate::{FlowPlanes, HostError};
+use crate::{Flow, FlowPlanes, HostError};
 
 /// The fixed engine's parameters, checked once, and the threads that run it.
 pub struct PairPool {
@@ -136,12 +136,18 @@ impl PairPixels<'_> {
         };
         let fields = PairFields {
             planes: FlowPlanes {
-                width: self.width,
-                height: self.height,
-                vcx: plane(|p| f64::from(p.v_c[0])),
-                vcy: plane(|p| f64::from(p.v_c[1])),
-                vdx: plane(|p| f64::from(p.v_d[0])),
-                vdy: plane(|p| f64::from(p.v_d[1])),
+                v_c: Flow {
+                    width: self.width,
+                    height: self.height,
+                    u: plane(|p| f64::from(p.v_c[0])),
+                    v: plane(|p| f64::from(p.v_c[1])),
+                },
+                v_d: Flow {
+                    width: self.width,
+                    height: self.height,
+                    u: plane(|p| f64::from(p.v_d[0])),
+                    v: plane(|p| f64::from(p.v_d[1])),
+                },
             },
             rep,
         };

@@ -15,7 +15,7 @@
 //! vectors' rounding residue bit for bit on the 1×1 case.
 
 use crate::settings::Setting;
-use crate::{FlowPlanes, Gray, HostError};
+use crate::{Flow, FlowPlanes, Gray, HostError};
 
 /// Radius of input one output pixel depends on (SPEC §6).
 const HALO: isize = 7;
@@ -271,12 +271,8 @@ pub fn compute(prev: &Gray, next: &Gray, params: &FloatParams) -> Result<FloatFl
     let vdy = a.inner(0, |x, y| solve(x, y).1);
 
     Ok(FloatFlow {
-        width: w,
-        height: h,
-        vcx: vcx.frame(w, h),
-        vcy: vcy.frame(w, h),
-        vdx: vdx.frame(w, h),
-        vdy: vdy.frame(w, h),
+        v_c: Flow::from_parts(w, h, vcx.frame(w, h), vcy.frame(w, h)),
+        v_d: Flow::from_parts(w, h, vdx.frame(w, h), vdy.frame(w, h)),
     })
 }
 
@@ -310,7 +306,7 @@ fn channel(m: &[f64], scaling: FloatScaling, fixed_k: f64) -> Vec<u8> {
 pub fn representation(flow: &FloatFlow, prev: &Gray, scaling: FloatScaling) -> Vec<u8> {
     assert_eq!(
         prev.size(),
-        (flow.width, flow.height),
+        (flow.width(), flow.height()),
         "prev must be the flow's frame n"
     );
     let (k_d, k_c) = match scaling {
@@ -342,7 +338,7 @@ mod tests {
     fn identical_frames_give_zero_fields() {
         let f = gray(9, 7, |x, y| (x * 37 + y * 11) as u8);
         let flow = compute(&f, &f, &FloatParams::default()).unwrap();
-        for plane in [&flow.vcx, &flow.vcy, &flow.vdx, &flow.vdy] {
+        for plane in [&flow.v_c.u, &flow.v_c.v, &flow.v_d.u, &flow.v_d.v] {
             assert!(plane.iter().all(|&v| v == 0.0));
         }
         let rep = representation(&flow, &f, FloatScaling::PerFrameMinMax);
@@ -362,18 +358,19 @@ mod tests {
         let flow = compute(&a, &b, &FloatParams::default()).unwrap();
         let flip = compute(&mirror(&a), &mirror(&b), &FloatParams::default()).unwrap();
         let scale = flow
-            .vdx
+            .v_d
+            .u
             .iter()
-            .chain(&flow.vdy)
+            .chain(&flow.v_d.v)
             .fold(0.0f64, |m, v| m.max(v.abs()));
         assert!(scale > 0.0);
         for y in 0..h {
             for x in 0..w {
                 let (i, j) = (y * w + x, y * w + (w - 1 - x));
-                assert!((flow.vcx[i] + flip.vcx[j]).abs() <= 1e-12 * scale);
-                assert!((flow.vcy[i] - flip.vcy[j]).abs() <= 1e-12 * scale);
-                assert!((flow.vdx[i] + flip.vdx[j]).abs() <= 1e-12 * scale);
-                assert!((flow.vdy[i] - flip.vdy[j]).abs() <= 1e-12 * scale);
+                assert!((flow.v_c.u[i] + flip.v_c.u[j]).abs() <= 1e-12 * scale);
+                assert!((flow.v_c.v[i] - flip.v_c.v[j]).abs() <= 1e-12 * scale);
+                assert!((flow.v_d.u[i] + flip.v_d.u[j]).abs() <= 1e-12 * scale);
+                assert!((flow.v_d.v[i] - flip.v_d.v[j]).abs() <= 1e-12 * scale);
             }
         }
     }

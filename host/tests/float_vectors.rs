@@ -102,7 +102,7 @@ fn fields_match_every_vector() {
             case.number("width") as usize,
             case.number("height") as usize,
         );
-        assert_eq!((flow.width, flow.height), (w, h), "{}", case.name);
+        assert_eq!((flow.width(), flow.height()), (w, h), "{}", case.name);
         let read = |name: &str| {
             let a = npy::read(&case.dir.join(format!("{name}.npy"))).unwrap();
             assert_eq!((a.height, a.width), (h, w), "{} {name}: shape", case.name);
@@ -113,7 +113,7 @@ fn fields_match_every_vector() {
             field_scale(&theirs[0], &theirs[1]),
             field_scale(&theirs[2], &theirs[3]),
         ];
-        let ours = [&flow.vcx, &flow.vcy, &flow.vdx, &flow.vdy];
+        let ours = [&flow.v_c.u, &flow.v_c.v, &flow.v_d.u, &flow.v_d.v];
         let ours_scales = [field_scale(ours[0], ours[1]), field_scale(ours[2], ours[3])];
         let mut line = format!(
             "{:>16}  |v_c| {:.3e} |v_d| {:.3e}",
@@ -173,7 +173,7 @@ fn compare_rep(case: &Case, file: &str, flow: &FloatFlow, scaling: FloatScaling)
     let theirs = image_io::read_rgb8(&case.dir.join(file)).unwrap();
     assert_eq!(
         (theirs.width, theirs.height),
-        (flow.width, flow.height),
+        (flow.width(), flow.height()),
         "{} {file}",
         case.name
     );
@@ -231,7 +231,7 @@ fn representations_match_every_vector_but_for_ties() {
         );
         total_minmax += minmax;
         total_fixed += fixed;
-        bytes += 2 * flow.width * flow.height;
+        bytes += 2 * flow.width() * flow.height();
     }
     println!(
         "rounding ties: rep.png {total_minmax}, rep_fixed.png {total_fixed} (of {bytes} R/G bytes each)"

@@ -179,16 +179,13 @@ fn fields<'py>(
     let (h, w) = p.frame_shape();
     let planes = compute_pair(py, &settings, &p, &n)?.planes;
     let out = PyDict::new(py);
-    let (rx, ry) = planes.v_r();
-    for (name, x, y) in [
-        ("v_c", &planes.vcx, &planes.vcy),
-        ("v_d", &planes.vdx, &planes.vdy),
-        ("v_R", &rx, &ry),
-    ] {
+    let v_r = planes.v_r();
+    for (name, field) in [("v_c", &planes.v_c), ("v_d", &planes.v_d), ("v_R", &v_r)] {
         // Exact for the core's v_c and v_d (f32 values in f64 planes).
-        let xy: Vec<f32> = x
+        let xy: Vec<f32> = field
+            .u
             .iter()
-            .zip(y)
+            .zip(&field.v)
             .flat_map(|(x, y)| [*x as f32, *y as f32])
             .collect();
         out.set_item(name, array(py, xy, &[h, w, 2])?)?;
@@ -748,7 +745,7 @@ fn read_flo<'py>(
         .u
         .iter()
         .zip(&flo.v)
-        .flat_map(|(u, v)| [*u, *v])
+        .flat_map(|(u, v)| [*u as f32, *v as f32])
         .collect();
     array(py, uv, &[flo.height, flo.width, 2])
 }

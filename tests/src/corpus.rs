@@ -7,7 +7,7 @@
 use std::f64::consts::PI;
 
 use reynoldsflow_host::reference::FloatFlow;
-use reynoldsflow_host::{Gray, image_io, npy};
+use reynoldsflow_host::{Flow, Gray, image_io, npy};
 
 use crate::{Pattern, Rng, frame_pair, vector_cases, vectors_dir};
 
@@ -611,12 +611,8 @@ fn vectors() -> Vec<Case> {
             };
             let stored = Stored {
                 flow: FloatFlow {
-                    width: prev.width,
-                    height: prev.height,
-                    vcx: plane("vcx"),
-                    vcy: plane("vcy"),
-                    vdx: plane("vdx"),
-                    vdy: plane("vdy"),
+                    v_c: Flow::from_parts(prev.width, prev.height, plane("vcx"), plane("vcy")),
+                    v_d: Flow::from_parts(prev.width, prev.height, plane("vdx"), plane("vdy")),
                 },
                 rep_minmax: rep("rep.png"),
                 rep_fixed: rep("rep_fixed.png"),

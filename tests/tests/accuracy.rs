@@ -157,8 +157,8 @@ fn measure(case: &Case, set_index: usize) -> PairResult {
         case.name
     );
     let p = &minmax.planes;
-    let vc = FieldError::measure(&p.vcx, &p.vcy, &flow.vcx, &flow.vcy);
-    let vd = FieldError::measure(&p.vdx, &p.vdy, &flow.vdx, &flow.vdy);
+    let vc = FieldError::measure(&p.v_c.u, &p.v_c.v, &flow.v_c.u, &flow.v_c.v);
+    let vd = FieldError::measure(&p.v_d.u, &p.v_d.v, &flow.v_d.u, &flow.v_d.v);
     PairResult {
         family: case.family,
         name: case.name.clone(),

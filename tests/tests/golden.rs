@@ -34,10 +34,10 @@ fn fnv(bytes: &[u8]) -> u64 {
 /// `|v_d|`), little-endian.
 fn field_bytes(out: &FixedOutput) -> Vec<u8> {
     let planes = [
-        &out.planes.vcx,
-        &out.planes.vcy,
-        &out.planes.vdx,
-        &out.planes.vdy,
+        &out.planes.v_c.u,
+        &out.planes.v_c.v,
+        &out.planes.v_d.u,
+        &out.planes.v_d.v,
         &out.m_c,
         &out.m_d,
     ];

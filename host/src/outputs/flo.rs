@@ -2,23 +2,10 @@
 //! width and height as little-endian `i32`, then `u, v` as little-endian
 //! `f32` per pixel, row-major (x to the right, y down, in pixels).
 
-use crate::HostError;
+use crate::{Flow, HostError};
 
 /// The tag float at the start of every `.flo` file.
 pub const TAG: f32 = 202_021.25;
-
-/// A flow field read from a `.flo` file.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Flo {
-    /// Columns.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// `u` (x) per pixel, row-major.
-    pub u: Vec<f32>,
-    /// `v` (y) per pixel.
-    pub v: Vec<f32>,
-}
 
 /// The bytes of a `.flo` file of the planes `u`, `v` (rounded to `f32`).
 ///
@@ -45,8 +32,8 @@ pub fn encode(width: usize, height: usize, u: &[f64], v: &[f64]) -> Result<Vec<u
     Ok(out)
 }
 
-/// Parse a `.flo` file.
-pub fn decode(bytes: &[u8]) -> Result<Flo, String> {
+/// Parse a `.flo` file; its `f32` values are exact in the field's `f64`.
+pub fn decode(bytes: &[u8]) -> Result<Flow, String> {
     let word = |i: usize| -> Option<[u8; 4]> { bytes.get(4 * i..4 * i + 4)?.try_into().ok() };
     let (Some(tag), Some(w), Some(h)) = (word(0), word(1), word(2)) else {
         return Err("too short for a .flo header".to_owned());
@@ -72,13 +59,13 @@ pub fn decode(bytes: &[u8]) -> Result<Flo, String> {
             bytes.len(),
         ));
     }
-    let value = |i: usize| f32::from_le_bytes(word(3 + i).expect("length checked"));
-    Ok(Flo {
+    let value = |i: usize| f64::from(f32::from_le_bytes(word(3 + i).expect("length checked")));
+    Ok(Flow::from_parts(
         width,
         height,
-        u: (0..n).map(|i| value(2 * i)).collect(),
-        v: (0..n).map(|i| value(2 * i + 1)).collect(),
-    })
+        (0..n).map(|i| value(2 * i)).collect(),
+        (0..n).map(|i| value(2 * i + 1)).collect(),
+    ))
 }
 
 #[cfg(test)]
@@ -92,7 +79,8 @@ mod tests {
         assert_eq!(bytes.len(), 12 + 48);
         let flo = decode(&bytes).unwrap();
         assert_eq!((flo.width, flo.height), (3, 2));
-        assert_eq!(flo.u, [0.5, -1.0, 2.0, 0.0, 1e-3, 7.25]);
+        // Each value as the file's f32 holds it.
+        assert_eq!(flo.u, [0.5, -1.0, 2.0, 0.0, f64::from(1e-3f32), 7.25]);
         assert_eq!(flo.v, [1.0; 6]);
         assert!(decode(&bytes[..20]).is_err());
         assert!(decode(b"garbage-garbage-").is_err());

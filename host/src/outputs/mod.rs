@@ -188,9 +188,12 @@ impl PairFields {
     pub fn field(&self, field: Field) -> (Vec<f64>, Vec<f64>) {
         let p = &self.planes;
         match field {
-            Field::VC => (p.vcx.clone(), p.vcy.clone()),
-            Field::VD => (p.vdx.clone(), p.vdy.clone()),
-            Field::VR => p.v_r(),
+            Field::VC => (p.v_c.u.clone(), p.v_c.v.clone()),
+            Field::VD => (p.v_d.u.clone(), p.v_d.v.clone()),
+            Field::VR => {
+                let v_r = p.v_r();
+                (v_r.u, v_r.v)
+            }
         }
     }
 }
@@ -300,7 +303,7 @@ impl OutputSpec {
 
     /// Every file of one result: `(path relative to the output folder, bytes)`.
     pub fn files(&self, stem: &str, f: &PairFields) -> Result<Vec<(PathBuf, Vec<u8>)>, HostError> {
-        let (w, h) = (f.planes.width, f.planes.height);
+        let (w, h) = (f.planes.width(), f.planes.height());
         let mut files = Vec::new();
         if self.rep {
             files.push(self.image_file(stem, w, h, &self.image(f))?);
@@ -621,16 +624,13 @@ pub fn clean_stale_temps(dir: &Path) -> Result<usize, HostError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Flow;
 
     fn fields() -> PairFields {
         PairFields {
             planes: FlowPlanes {
-                width: 2,
-                height: 1,
-                vcx: vec![1.0, 0.0],
-                vcy: vec![0.0, 2.0],
-                vdx: vec![0.5, 0.0],
-                vdy: vec![0.0, -1.0],
+                v_c: Flow::from_parts(2, 1, vec![1.0, 0.0], vec![0.0, 2.0]),
+                v_d: Flow::from_parts(2, 1, vec![0.5, 0.0], vec![0.0, -1.0]),
             },
             rep: vec![10, 20, 30, 40, 50, 60],
         }
