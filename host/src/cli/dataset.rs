@@ -178,10 +178,21 @@ fn walk(
         return Ok(());
     }
     let mut has_frames = false;
-    let mut entries: Vec<_> = fs::read_dir(dir)
-        .map_err(|e| HostError::io(dir, e))?
-        .filter_map(Result::ok)
-        .collect();
+    let listing = match fs::read_dir(dir) {
+        Ok(listing) => listing,
+        Err(e) if rel.as_os_str().is_empty() => return Err(HostError::io(dir, e)),
+        // A sub-folder that cannot be listed is an item that fails when it
+        // is opened (with this error), not the end of the whole job.
+        Err(_) => {
+            items.push(Item {
+                src: dir.to_owned(),
+                rel: rel.to_owned(),
+                frames: true,
+            });
+            return Ok(());
+        }
+    };
+    let mut entries: Vec<_> = listing.filter_map(Result::ok).collect();
     entries.sort_by_key(|e| e.file_name());
     for entry in entries {
         let name = entry.file_name();
