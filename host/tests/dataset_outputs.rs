@@ -1,5 +1,6 @@
 //! `reynoldsflow dataset`: DST holds exactly what the settings write, for
-//! the right source. An unreadable sub-folder fails alone.
+//! the right source. No item's outputs meet another's; an unreadable
+//! sub-folder fails alone.
 
 mod run_support;
 
@@ -33,10 +34,89 @@ fn statuses(out: &std::process::Output) -> Vec<(String, String)> {
     v
 }
 
+/// Every file `run SRC --out` writes with `flags`, as (name, bytes).
+fn run_files(tmp: &Path, src: &Path, flags: &[&str]) -> Vec<(String, Vec<u8>)> {
+    let out = tmp.join("reference");
+    let _ = fs::remove_dir_all(&out);
+    let mut a = args!["run", src, "--out", out].to_vec();
+    a.extend(flags.iter().map(|f| (*f).into()));
+    ok(&run(&a));
+    tree(&out)
+        .into_iter()
+        .map(|f| (f.clone(), fs::read(out.join(&f)).unwrap()))
+        .collect()
+}
+
+/// The files of the output folder `dir` (its marker, and the folders of
+/// other items below it, left out), as (name, bytes).
+fn item_files(dir: &Path, nested: &[&str]) -> Vec<(String, Vec<u8>)> {
+    tree(dir)
+        .into_iter()
+        .filter(|f| f != MARKER && !nested.iter().any(|n| f.starts_with(&format!("{n}/"))))
+        .map(|f| (f.clone(), fs::read(dir.join(&f)).unwrap()))
+        .collect()
+}
+
+/// The same files with the same bytes, reported by name.
+#[track_caller]
+fn assert_same(got: &[(String, Vec<u8>)], want: &[(String, Vec<u8>)], what: &str) {
+    let names = |v: &[(String, Vec<u8>)]| v.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+    assert_eq!(names(got), names(want), "{what}: file names");
+    for ((name, a), (_, b)) in got.iter().zip(want) {
+        assert!(a == b, "{what}: {name} differs");
+    }
+}
+
 fn dataset(src: &Path, dst: &Path, flags: &[&str]) -> std::process::Output {
     let mut a = args!["dataset", src, dst].to_vec();
     a.extend(flags.iter().map(|f| (*f).into()));
     run(&a)
+}
+
+#[test]
+fn no_item_writes_where_another_writes_its_side_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    clip(&src.join("x.y4m"), 4, 0);
+    clip(&src.join("x/hsv.y4m"), 4, 3);
+    clip(&src.join("y.y4m"), 4, 1);
+    clip(&src.join("y/v_R.y4m"), 4, 5);
+    clip(&src.join("y/v_c.y4m"), 4, 7);
+
+    // --viz: x's hsv/ is its own; x/hsv.y4m is refused, the rest done.
+    let res = dataset(&src, &dst, &["--viz"]);
+    let err = stderr(&res);
+    assert_eq!(res.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("x/hsv.y4m: its output folder")
+            && err.contains("x.y4m's --viz images go")
+            && err.contains("--viz"),
+        "{err}"
+    );
+    assert_same(
+        &item_files(&dst.join("x"), &[]),
+        &run_files(tmp.path(), &src.join("x.y4m"), &["--viz"]),
+        "x",
+    );
+    assert!(
+        dst.join("y/v_R").join(MARKER).is_file(),
+        "no clash without --npy"
+    );
+
+    // --npy=v_R: y/v_R.y4m is refused; y/v_c.y4m is not (v_c is not written).
+    let dst2 = tmp.path().join("dst2");
+    let res = dataset(&src, &dst2, &["--npy=v_R"]);
+    let err = stderr(&res);
+    assert_eq!(res.status.code(), Some(1), "{err}");
+    assert!(err.contains("y/v_R.y4m: its output folder"), "{err}");
+    assert!(!err.contains("v_c.y4m"), "{err}");
+    assert!(err.contains("1 of 5 items failed"), "{err}");
+    assert_same(
+        &item_files(&dst2.join("y"), &["v_c"]),
+        &run_files(tmp.path(), &src.join("y.y4m"), &["--npy=v_R"]),
+        "y",
+    );
+    assert!(dst2.join("y/v_c").join(MARKER).is_file());
 }
 
 #[test]
