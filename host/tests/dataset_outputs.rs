@@ -1,11 +1,14 @@
 //! `reynoldsflow dataset`: DST holds exactly what the settings write, for
-//! the right source. No item's outputs meet another's; an unreadable
-//! sub-folder fails alone.
+//! the right source. No item's outputs meet another's; a redone item
+//! keeps no file of older settings; an item whose source changed or whose
+//! outputs were lost is redone; an unreadable sub-folder fails alone.
 
 mod run_support;
 
+use std::ffi::OsStr;
 use std::fs;
 use std::path::Path;
+use std::time::{Duration, SystemTime};
 
 use run_support::*;
 
@@ -117,6 +120,163 @@ fn no_item_writes_where_another_writes_its_side_outputs() {
         "y",
     );
     assert!(dst2.join("y/v_c").join(MARKER).is_file());
+}
+
+#[test]
+fn a_redone_item_holds_exactly_what_the_new_settings_write() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    clip(&src.join("v.y4m"), 6, 0);
+    // An item nested in v's output folder, and a file of the user's there.
+    clip(&src.join("v/inner.y4m"), 3, 2);
+    ok(&dataset(
+        &src,
+        &dst,
+        &["--variant", "cd", "--viz", "--npy=v_R"],
+    ));
+    fs::write(dst.join("v/notes.txt"), "mine").unwrap();
+
+    for flags in [
+        &["--max-frames", "3"][..],
+        &["--image-format", "jpg"],
+        &["--step", "2", "--flo"],
+        &["--keep-count", "--no-rep", "--npy=v_c"],
+        &[],
+    ] {
+        let err = ok(&dataset(&src, &dst, flags));
+        assert!(err.contains("2 items: 2 done"), "{flags:?}: {err}");
+        let mut want = run_files(tmp.path(), &src.join("v.y4m"), flags);
+        want.push(("notes.txt".into(), b"mine".to_vec()));
+        want.sort();
+        assert_same(
+            &item_files(&dst.join("v"), &["inner"]),
+            &want,
+            &format!("{flags:?}"),
+        );
+        // Folders of outputs no longer asked for are gone too.
+        for sub in ["hsv", "v_c", "v_d", "v_R"] {
+            let asked = want.iter().any(|(f, _)| f.starts_with(&format!("{sub}/")));
+            assert_eq!(dst.join("v").join(sub).exists(), asked, "{flags:?}: {sub}");
+        }
+        assert_same(
+            &item_files(&dst.join("v/inner"), &[]),
+            &run_files(tmp.path(), &src.join("v/inner.y4m"), flags),
+            &format!("{flags:?} inner"),
+        );
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(feature = "crash-injection"),
+    ignore = "the crash hook needs --features reynoldsflow-host/crash-injection (scripts/test)"
+)]
+fn a_redo_after_a_crash_with_other_settings_leaves_nothing_of_the_crashed_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    clip(&src.join("v.y4m"), 8, 0);
+    ok(&dataset(&src, &dst, &["--threads", "1"]));
+    // Killed after 3 results of a redo with other settings...
+    let res = run_with(
+        &args![
+            "dataset",
+            src,
+            dst,
+            "--threads",
+            "1",
+            "--viz",
+            "--image-format",
+            "jpg"
+        ],
+        None,
+        &[("REYNOLDSFLOW_ABORT_AFTER", OsStr::new("3"))],
+    );
+    assert!(!res.status.success(), "{}", stderr(&res));
+    assert!(
+        tree(&dst).iter().any(|f| f.ends_with(".jpg")),
+        "{:?}",
+        tree(&dst)
+    );
+    // ...then redone with a third: none of the first two runs' files is left.
+    let flags = ["--threads", "1", "--npy=v_d", "--no-rep"];
+    ok(&dataset(&src, &dst, &flags));
+    assert_same(
+        &item_files(&dst.join("v"), &[]),
+        &run_files(tmp.path(), &src.join("v.y4m"), &flags),
+        "v",
+    );
+    assert_eq!(
+        fs::read_dir(dst.join("v")).unwrap().count(),
+        2,
+        "v_d/ and the marker: {:?}",
+        tree(&dst)
+    );
+}
+
+#[test]
+fn a_changed_source_or_a_lost_output_is_redone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, dst) = (tmp.path().join("src"), tmp.path().join("dst"));
+    for name in ["v", "w", "same"] {
+        clip(&src.join(format!("{name}.y4m")), 6, name.len());
+    }
+    let frames = src.join("seq");
+    fs::create_dir_all(&frames).unwrap();
+    for t in 0..3 {
+        fs::write(
+            frames.join(format!("f{t}.pgm")),
+            pgm(&moving_frame(32, 24, t)),
+        )
+        .unwrap();
+    }
+    ok(&dataset(&src, &dst, &[]));
+
+    // v: new content of the same size (and a later modification time).
+    clip(&src.join("v.y4m"), 6, 9);
+    let later = SystemTime::now() + Duration::from_secs(10);
+    fs::File::options()
+        .write(true)
+        .open(src.join("v.y4m"))
+        .unwrap()
+        .set_modified(later)
+        .unwrap();
+    // w: one output deleted, one truncated.
+    fs::remove_file(dst.join("w/000002.png")).unwrap();
+    let cut = fs::read(dst.join("w/000001.png")).unwrap();
+    fs::write(dst.join("w/000001.png"), &cut[..20]).unwrap();
+    // seq: a frame added.
+    fs::write(frames.join("f3.pgm"), pgm(&moving_frame(32, 24, 3))).unwrap();
+
+    let res = dataset(&src, &dst, &[]);
+    ok(&res);
+    assert_eq!(
+        statuses(&res),
+        [
+            ("same.y4m".into(), "skipped".into()),
+            ("seq".into(), "done".into()),
+            ("v.y4m".into(), "done".into()),
+            ("w.y4m".into(), "done".into()),
+        ]
+    );
+    for name in ["v", "w", "same"] {
+        let src = src.join(format!("{name}.y4m"));
+        assert_same(
+            &item_files(&dst.join(name), &[]),
+            &run_files(tmp.path(), &src, &[]),
+            name,
+        );
+    }
+    assert_same(
+        &item_files(&dst.join("seq"), &[]),
+        &run_files(tmp.path(), &frames, &[]),
+        "seq",
+    );
+    let res = dataset(&src, &dst, &[]);
+    assert!(
+        statuses(&res).iter().all(|(_, s)| s == "skipped"),
+        "{:?}",
+        statuses(&res)
+    );
 }
 
 #[test]

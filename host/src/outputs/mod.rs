@@ -22,7 +22,9 @@
 //! ([`StreamFormat`]).
 
 use std::fs;
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use npyz::WriterBuilder;
 
@@ -497,6 +499,16 @@ fn y4m_frame_write(rgb: &[u8], out: &mut [u8]) {
 pub struct DirWriter {
     root: PathBuf,
     spec: OutputSpec,
+    journal: Option<Mutex<Journal>>,
+}
+
+/// The files a [`DirWriter`] has written, each named in the journal file
+/// before it appears under its final name: a killed run's outputs can be
+/// found and removed by the next one ([`DirWriter::journaled`]).
+#[derive(Debug)]
+struct Journal {
+    file: fs::File,
+    written: Vec<(PathBuf, u64)>,
 }
 
 impl DirWriter {
@@ -532,7 +544,54 @@ impl DirWriter {
         Ok(Self {
             root: root.to_owned(),
             spec: spec.clone(),
+            journal: None,
         })
+    }
+
+    /// Name every file in `journal` (created afresh), one path relative to
+    /// the output folder a line, before the file is put in place; and keep
+    /// their sizes for [`Self::written`].
+    pub fn journaled(mut self, journal: &Path) -> Result<Self, HostError> {
+        let file = fs::File::create(journal).map_err(|e| HostError::io(journal, e))?;
+        self.journal = Some(Mutex::new(Journal {
+            file,
+            written: Vec::new(),
+        }));
+        Ok(self)
+    }
+
+    /// Every file written so far with its size in bytes, sorted by path
+    /// (empty unless [`Self::journaled`]).
+    pub fn written(&self) -> Vec<(PathBuf, u64)> {
+        let Some(journal) = &self.journal else {
+            return Vec::new();
+        };
+        let mut files = journal
+            .lock()
+            .expect("no panics holding it")
+            .written
+            .clone();
+        files.sort();
+        files
+    }
+
+    /// Write `bytes` to the output folder's `rel`, named in the journal first.
+    fn put(&self, rel: &Path, bytes: &[u8]) -> Result<(), HostError> {
+        let path = self.root.join(rel);
+        let Some(journal) = &self.journal else {
+            return atomic::write_file(&path, bytes);
+        };
+        let line = format!("{}\n", rel.display());
+        journal
+            .lock()
+            .expect("no panics holding it")
+            .file
+            .write_all(line.as_bytes())
+            .map_err(|e| HostError::io(&path, e))?;
+        atomic::write_file(&path, bytes)?;
+        let mut journal = journal.lock().expect("no panics holding it");
+        journal.written.push((rel.to_owned(), bytes.len() as u64));
+        Ok(())
     }
 
     /// The output folder.
@@ -571,7 +630,7 @@ impl DirWriter {
         #[cfg(feature = "crash-injection")]
         crash_injection::abort_hook(&self.root, files);
         for (rel, bytes) in files {
-            atomic::write_file(&self.root.join(rel), bytes)?;
+            self.put(rel, bytes)?;
         }
         Ok(())
     }
@@ -591,8 +650,7 @@ impl DirWriter {
                     continue;
                 }
                 let bytes = fs::read(&src).map_err(|e| HostError::io(&src, e))?;
-                let dst = src.with_file_name(format!("{to}.{ext}"));
-                atomic::write_file(&dst, &bytes)?;
+                self.put(&Path::new(dir).join(format!("{to}.{ext}")), &bytes)?;
             }
         }
         Ok(())
