@@ -568,6 +568,8 @@ pub fn convert_args(mut kw: Kwargs<'_>) -> PyResult<(EngineArgs, OutputArgs, boo
         flo,
         image_format,
         jpeg_quality,
+        jpeg_subsampling: None,
+        png_compression: None,
         keep_count,
         max_frames,
         frames,

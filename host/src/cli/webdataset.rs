@@ -98,8 +98,16 @@ pub fn settings(
         "flo": names(&spec.flo),
         "image_format": spec.image_format.extension(),
         "jpeg_quality": match spec.image_format {
-            ImageFormat::Jpeg { quality } => Some(quality),
-            ImageFormat::Png => None,
+            ImageFormat::Jpeg { quality, .. } => Some(quality),
+            ImageFormat::Png { .. } => None,
+        },
+        "jpeg_subsampling": match spec.image_format {
+            ImageFormat::Jpeg { subsampling, .. } => Some(subsampling.name()),
+            ImageFormat::Png { .. } => None,
+        },
+        "png_compression": match spec.image_format {
+            ImageFormat::Png { compression } => Some(compression.name()),
+            ImageFormat::Jpeg { .. } => None,
         },
         "keep_count": output.keep_count,
         "max_frames": output.max_frames,

@@ -9,8 +9,9 @@
 //! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64 (or `--npy-dtype f32`/`f16`: rounded to nearest), shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
 //! | `DIR/v_R/STEM.flo` (or `v_c/`, `v_d/`) | `--flo` (or `--flo=v_c,…`) | Middlebury `.flo` ([`flo`]): `f32` `(u, v)` |
 //!
+//! PNGs are compressed as `--png-compression` says ([`PngCompression`]).
 //! With `--image-format jpg` the images are `STEM.jpg` (baseline JPEG of
-//! `--jpeg-quality`, RGB), not PNGs.
+//! `--jpeg-quality` and `--jpeg-subsampling`, [`JpegSubsampling`]), not PNGs.
 //!
 //! so every kind of output of one frame has the same stem, in a folder of
 //! its own. Each file is written to a hidden temp name in its folder
@@ -28,6 +29,7 @@ use std::sync::Mutex;
 
 use npyz::WriterBuilder;
 
+pub use crate::image_io::{JpegSubsampling, PngCompression};
 use crate::page_buffer::ByteBuffer;
 use crate::{FlowPlanes, HostError, atomic, image_io, viz};
 
@@ -108,16 +110,28 @@ impl NpyDtype {
 }
 
 /// `--image-format`: how images are stored.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
     /// PNG, lossless (`STEM.png`).
-    #[default]
-    Png,
+    Png {
+        /// How hard its DEFLATE works (`--png-compression`).
+        compression: PngCompression,
+    },
     /// Baseline JPEG of this quality, 1 to 100 (`STEM.jpg`), lossy.
     Jpeg {
         /// The encoder's quality, 1 to 100.
         quality: u8,
+        /// The chroma sampling (`--jpeg-subsampling`).
+        subsampling: JpegSubsampling,
     },
+}
+
+impl Default for ImageFormat {
+    fn default() -> Self {
+        ImageFormat::Png {
+            compression: PngCompression::default(),
+        }
+    }
 }
 
 /// `--image-format`'s names on the command line.
@@ -136,7 +150,7 @@ impl ImageFormat {
     /// The file extension.
     pub fn extension(self) -> &'static str {
         match self {
-            ImageFormat::Png => "png",
+            ImageFormat::Png { .. } => "png",
             ImageFormat::Jpeg { .. } => "jpg",
         }
     }
@@ -144,8 +158,13 @@ impl ImageFormat {
     /// An RGB8 image of `width × height` in this format.
     pub fn encode(self, width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, HostError> {
         match self {
-            ImageFormat::Png => image_io::encode_png(width, height, rgb),
-            ImageFormat::Jpeg { quality } => image_io::encode_jpeg(width, height, rgb, quality),
+            ImageFormat::Png { compression } => {
+                image_io::encode_png_with(width, height, rgb, compression)
+            }
+            ImageFormat::Jpeg {
+                quality,
+                subsampling,
+            } => image_io::encode_jpeg(width, height, rgb, quality, subsampling),
         }
     }
 }
@@ -232,7 +251,7 @@ impl Default for OutputSpec {
             flo: Vec::new(),
             hsv_max: None,
             npy_dtype: NpyDtype::F64,
-            image_format: ImageFormat::Png,
+            image_format: ImageFormat::default(),
         }
     }
 }
@@ -351,8 +370,20 @@ impl OutputSpec {
         if self.npy_dtype != NpyDtype::F64 {
             line += &format!(" npy_dtype={}", self.npy_dtype.name());
         }
-        if let ImageFormat::Jpeg { quality } = self.image_format {
-            line += &format!(" image=jpg:{quality}");
+        match self.image_format {
+            ImageFormat::Png { compression } if compression != PngCompression::default() => {
+                line += &format!(" png={}", compression.name());
+            }
+            ImageFormat::Png { .. } => {}
+            ImageFormat::Jpeg {
+                quality,
+                subsampling,
+            } => {
+                line += &format!(" image=jpg:{quality}");
+                if subsampling != JpegSubsampling::default() {
+                    line += &format!(":{}", subsampling.name());
+                }
+            }
         }
         line
     }
