@@ -155,11 +155,12 @@ pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PngCompression {
     /// fdeflate's PNG-tuned DEFLATE (the `png` crate's fast path), adaptive
-    /// row filters: at 640×480 about 30× the speed of `Default`, the files
-    /// about as small (docs/PERFORMANCE.md, "Dataset outputs").
+    /// row filters, as the `image` crate's encoder defaults to: on real
+    /// footage at 640×480 an order of magnitude faster than `Default`, the
+    /// files as small or smaller (docs/PERFORMANCE.md, `scripts/bench-dataset`).
     #[default]
     Fast,
-    /// zlib's default level through flate2 (the files before this setting).
+    /// zlib's default level (flate2).
     Default,
     /// zlib's best level: the most time, files a few % smaller at most.
     Best,
