@@ -11,8 +11,9 @@
 //! and one destination; `--files-from` takes the items from a manifest;
 //! each item's record goes to stdout or `--status FILE` as a JSON line.
 
+use std::collections::HashMap;
 use std::fs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -43,9 +44,12 @@ Examples:
 
 Videos (mp4, avi, mkv, mov, webm, y4m, ...) become DST/<path>/<video stem>/000000.png, ...;
 folders holding PNG/JPEG/PGM frames become DST/<path>/ with the frames' stems.
-Resume: an item is finished when DST/<item>/.reynoldsflow-done exists (written last, with
-the options); a rerun skips finished items made with the same options and redoes the rest.
+Resume: an item is finished when DST/<item>/.reynoldsflow-done (written last) records the same
+options and source (size and modification time) and its files are all there at their sizes;
+a rerun skips finished items and redoes the rest, removing the files of earlier settings first.
 Files are written under hidden temp names and renamed, so none is ever partial.
+Items sharing an output path (x/hsv.y4m beside x.y4m --viz) are refused. To run several
+processes on one DST, give each its --shard I/N.
 A bad file is reported and skipped; the exit status is 1 if any item failed.
 One JSON line per item on stdout (or --status FILE): path, output, status, frames, outputs,
 seconds, error. In a Slurm job array (--array=0-7) the shard comes from SLURM_ARRAY_TASK_*;
@@ -153,10 +157,16 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     let threads = args.engine.threads();
     // Checked before anything is created; the workers' share is set below.
     let item_settings = args.item_settings();
-    ItemRunner::new(&item_settings, threads, args.force)?;
+    let checked = ItemRunner::new(&item_settings, threads, args.force)?;
+    // The sub-folders each item's side outputs go to (WebDataset: none).
+    let sides = if args.webdataset {
+        Vec::new()
+    } else {
+        checked.spec.subdirs()
+    };
     let log = prepare_destination(args)?;
     let all = find_items(args)?;
-    let (items, mut outcomes) = shard_items(args, shard, &all);
+    let (items, mut outcomes) = shard_items(args, shard, &all, &sides);
     for (item, outcome) in items.iter().zip(&outcomes) {
         if let Some(outcome) = outcome {
             log.write(&record(item, &args.dst.join(&item.rel), outcome, 0.0))?;
@@ -256,28 +266,47 @@ fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
 }
 
 /// The items of `shard`, each with its outcome already decided (`Some`:
-/// it clashes with an earlier item) or still to run (`None`).
+/// it clashes with another item) or still to run (`None`); `sides`: the
+/// sub-folders of an item's folder its side outputs go to.
 fn shard_items(
     args: &DatasetArgs,
     shard: Shard,
     all: &[Item],
+    sides: &[&str],
 ) -> (Vec<Item>, Vec<Option<Outcome>>) {
     // Two items writing one folder would mix their outputs: refuse the later
-    // one, judged on every item so that all shards agree.
+    // one, judged on every item so that all shards agree. So would an item
+    // whose folder is another's side-output folder (`x/hsv.y4m` beside
+    // `x.y4m --viz`): refuse the one inside.
+    let by_folder: HashMap<&Path, &Item> = all.iter().rev().map(|o| (o.rel.as_path(), o)).collect();
     let mut items = Vec::new();
     let mut outcomes: Vec<Option<Outcome>> = Vec::new();
     for (i, item) in all.iter().enumerate() {
         if !shard.contains(&shard_key(&args.src, item)) {
             continue;
         }
-        let clash = all[..i].iter().find(|o| o.rel == item.rel);
-        outcomes.push(clash.map(|o| {
-            Outcome::Failed(format!(
-                "its output folder {} is also the output of {}; rename one",
-                args.dst.join(&item.rel).display(),
+        let folder = args.dst.join(&item.rel).display().to_string();
+        let clash = all[..i].iter().find(|o| o.rel == item.rel).map(|o| {
+            format!(
+                "its output folder {folder} is also the output of {}; rename one",
                 o.src.display()
+            )
+        });
+        let side = || {
+            let (parent, name) = (item.rel.parent()?, item.rel.file_name()?.to_str()?);
+            let side = sides.iter().find(|s| **s == name)?;
+            let owner = by_folder.get(parent)?;
+            let what = if *side == "hsv" {
+                "--viz images".to_owned()
+            } else {
+                format!("{side} fields (--npy, --flo)")
+            };
+            Some(format!(
+                "its output folder {folder} is where {}'s {what} go; rename one",
+                owner.src.display()
             ))
-        }));
+        };
+        outcomes.push(clash.or_else(side).map(Outcome::Failed));
         items.push(item.clone());
     }
     (items, outcomes)

@@ -14,8 +14,8 @@ use super::values::choice;
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::ItemSettings;
 use reynoldsflow_host::outputs::{
-    self, DEFAULT_JPEG_QUALITY, DirWriter, Fields, ImageFormat, ImageFormatName, NpyDtype,
-    OutputSpec, StreamFormat, Variant,
+    self, DEFAULT_JPEG_QUALITY, DirWriter, Fields, ImageFormat, ImageFormatName, JpegSubsampling,
+    NpyDtype, OutputSpec, PngCompression, StreamFormat, Variant,
 };
 use reynoldsflow_host::pipeline::{self, Compute, Destination, Options, Summary};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan, FrameSize, Rate, Sampling};
@@ -155,6 +155,19 @@ pub struct OutputArgs {
     /// JPEG quality, 1 to 100, with --image-format jpg [default: 95].
     #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=100), requires = "image_format")]
     pub jpeg_quality: Option<u8>,
+    /// JPEG chroma sampling, with --image-format jpg: 444 (full-resolution
+    /// colour: each pixel keeps its own three channels, as the
+    /// representation's channels mean different things) or 420 (colour at
+    /// half resolution both ways: about 2/3 the bytes and faster, colour
+    /// edges blurred over 2x2 pixels) [default: 444].
+    #[arg(long, value_name = "444|420", value_parser = choice::<JpegSubsampling>(), requires = "image_format")]
+    pub jpeg_subsampling: Option<JpegSubsampling>,
+    /// PNG compression, lossless at every setting: fast (fdeflate, the
+    /// PNG-tuned DEFLATE), default (zlib's default level) or best (zlib's
+    /// best); on real footage fast is an order of magnitude faster than
+    /// default, the files as small (docs/PERFORMANCE.md) [default: fast].
+    #[arg(long, value_name = "fast|default|best", value_parser = choice::<PngCompression>())]
+    pub png_compression: Option<PngCompression>,
     /// Also write fields as Middlebury .flo (f32 u, v) in
     /// DIR/FIELD/STEM.flo [default: v_R].
     #[arg(long, value_name = "FIELDS", num_args = 0..=1, require_equals = true,
@@ -234,9 +247,12 @@ impl OutputArgs {
             hsv_max: self.hsv_max,
             npy_dtype: self.npy_dtype.unwrap_or_default(),
             image_format: match self.image_format {
-                None | Some(ImageFormatName::Png) => ImageFormat::Png,
+                None | Some(ImageFormatName::Png) => ImageFormat::Png {
+                    compression: self.png_compression.unwrap_or_default(),
+                },
                 Some(ImageFormatName::Jpg) => ImageFormat::Jpeg {
                     quality: self.jpeg_quality.unwrap_or(DEFAULT_JPEG_QUALITY),
+                    subsampling: self.jpeg_subsampling.unwrap_or_default(),
                 },
             },
         }
@@ -279,10 +295,22 @@ impl OutputArgs {
                 "applies to files in an output folder; --out - streams raw frames",
             ));
         }
-        if self.jpeg_quality.is_some() && self.image_format != Some(ImageFormatName::Jpg) {
+        let jpeg = self.image_format == Some(ImageFormatName::Jpg);
+        for (given, flag) in [
+            (self.jpeg_quality.is_some(), "--jpeg-quality"),
+            (self.jpeg_subsampling.is_some(), "--jpeg-subsampling"),
+        ] {
+            if given && !jpeg {
+                return Err(HostError::invalid(
+                    flag,
+                    "applies to --image-format jpg only",
+                ));
+            }
+        }
+        if self.png_compression.is_some() && (jpeg || to_stdout) {
             return Err(HostError::invalid(
-                "--jpeg-quality",
-                "applies to --image-format jpg only",
+                "--png-compression",
+                "applies to PNG files only (--image-format png, the default)",
             ));
         }
         Ok(())

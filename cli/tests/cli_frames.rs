@@ -386,6 +386,88 @@ fn jpeg_outputs_decode_to_the_right_size() {
     );
 }
 
+/// The JPEG error at quality 95 against the representation, as
+/// docs/datasets.md states it (mean absolute difference per byte, in
+/// levels of 255, on this test's 160×120 clip): held within 2×.
+const JPEG_Q95_ERROR: [(&str, f64); 2] = [("444", 3.1), ("420", 26.6)];
+
+#[test]
+fn jpeg_error_at_quality_95_is_held_and_png_is_lossless_at_every_compression() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames: Vec<_> = (0..6).map(|t| moving_frame(160, 120, t)).collect();
+    let src = tmp.path().join("clip.y4m");
+    fs::write(&src, y4m(&frames, "mono")).unwrap();
+    let out = |name: &str| tmp.path().join(name);
+    let mut pixels = Vec::new();
+    let mut sizes = Vec::new();
+    for level in ["fast", "default", "best"] {
+        ok(&run(&args![
+            "run",
+            src,
+            "--out",
+            out(level),
+            "--png-compression",
+            level
+        ]));
+        let files = names(&out(level), ".png");
+        assert_eq!(files.len(), 5);
+        pixels.push(
+            files
+                .iter()
+                .map(|f| rgb(&out(level).join(f)))
+                .collect::<Vec<_>>(),
+        );
+        sizes.push(
+            files
+                .iter()
+                .map(|f| fs::metadata(out(level).join(f)).unwrap().len())
+                .sum::<u64>(),
+        );
+    }
+    // Lossless at every setting; the settings do make other files.
+    assert!(
+        pixels.iter().all(|p| *p == pixels[0]),
+        "PNG pixels differ between compressions"
+    );
+    assert_ne!(sizes[0], sizes[1], "{sizes:?}");
+    println!(
+        "PNG bytes of 5 results: fast {} default {} best {}",
+        sizes[0], sizes[1], sizes[2]
+    );
+    for (sampling, documented) in JPEG_Q95_ERROR {
+        let dir = out(&format!("jpg{sampling}"));
+        ok(&run(&args![
+            "run",
+            src,
+            "--out",
+            dir,
+            "--image-format",
+            "jpg",
+            "--jpeg-subsampling",
+            sampling
+        ]));
+        let (mut sum, mut n, mut bytes) = (0.0, 0usize, 0);
+        for (file, exact) in names(&dir, ".jpg").iter().zip(&pixels[0]) {
+            bytes += fs::metadata(dir.join(file)).unwrap().len();
+            let jpg = image::open(dir.join(file)).unwrap().to_rgb8();
+            assert_eq!(jpg.dimensions(), (160, 120));
+            sum += jpg
+                .as_raw()
+                .iter()
+                .zip(exact)
+                .map(|(a, b)| f64::from(a.abs_diff(*b)))
+                .sum::<f64>();
+            n += exact.len();
+        }
+        let error = sum / n as f64;
+        println!("JPEG q95 {sampling}: mean |error| {error:.3} levels; {bytes} bytes of 5 results");
+        assert!(
+            error <= 2.0 * documented,
+            "{sampling}: {error} against {documented} documented"
+        );
+    }
+}
+
 #[test]
 fn bad_frame_and_type_values_are_refused_with_exit_status_2() {
     let tmp = tempfile::tempdir().unwrap();
@@ -425,6 +507,23 @@ fn bad_frame_and_type_values_are_refused_with_exit_status_2() {
             &["--image-format", "png", "--jpeg-quality", "90"],
             "--jpeg-quality",
         ),
+        (
+            &["--image-format", "jpg", "--jpeg-subsampling", "422"],
+            "[possible values: 444, 420]",
+        ),
+        (&["--jpeg-subsampling", "420"], "--image-format"),
+        (
+            &["--image-format", "png", "--jpeg-subsampling", "444"],
+            "--jpeg-subsampling",
+        ),
+        (
+            &["--png-compression", "9"],
+            "[possible values: fast, default, best]",
+        ),
+        (
+            &["--image-format", "jpg", "--png-compression", "best"],
+            "--png-compression",
+        ),
     ];
     for (flags, word) in cases {
         for cmd in ["run", "dataset"] {
@@ -462,6 +561,8 @@ fn help_documents_every_new_flag() {
             "--npy-dtype <f16|f32|f64>",
             "--image-format <png|jpg>",
             "--jpeg-quality <Q>",
+            "--jpeg-subsampling <444|420>",
+            "--png-compression <fast|default|best>",
         ] {
             assert!(help.contains(flag), "{cmd} --help lacks {flag}:\n{help}");
         }

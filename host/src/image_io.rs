@@ -1,5 +1,5 @@
 //! Image files: 8-bit PGM/PPM (binary or ASCII), PNG and JPEG in, as
-//! [`Gray`] (colour through BT.601, alpha ignored); RGB8 PNG out, atomically.
+//! [`Gray`] (colour through BT.601, alpha ignored); RGB8 PNG and JPEG out.
 //!
 //! Refused with a typed [`ImageProblem`]: samples wider than 8 bits, and
 //! PNM files whose maxval is not 255 (their samples would need a rescale
@@ -10,12 +10,13 @@ use std::fs;
 use std::io::Cursor;
 use std::path::Path;
 
-use image::codecs::png::PngEncoder;
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::codecs::pnm::PnmDecoder;
 use image::{
     DynamicImage, ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageReader,
 };
 
+use crate::settings::choices;
 use crate::{Gray, HostError, ImageProblem, atomic, decoder_guard, limits};
 
 /// An RGB8 image, row-major, `3 · width · height` bytes.
@@ -150,11 +151,66 @@ pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
     }
 }
 
-/// The bytes of a PNG holding an RGB8 image.
+/// How hard a PNG's DEFLATE works: smaller files against time, the pixels
+/// the same at every setting (PNG is lossless).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PngCompression {
+    /// fdeflate's PNG-tuned DEFLATE (the `png` crate's fast path), adaptive
+    /// row filters, as the `image` crate's encoder defaults to: on real
+    /// footage at 640×480 an order of magnitude faster than `Default`, the
+    /// files as small or smaller (docs/PERFORMANCE.md, `scripts/bench-dataset`).
+    #[default]
+    Fast,
+    /// zlib's default level (flate2).
+    Default,
+    /// zlib's best level: the most time, files a few % smaller at most.
+    Best,
+}
+
+choices!(PngCompression {
+    Fast => "fast", "fdeflate's PNG-tuned DEFLATE: the fastest, files as small as zlib's default";
+    Default => "default", "zlib's default level";
+    Best => "best", "zlib's best level: the most time, files a few % smaller at most";
+});
+
+/// How a JPEG's chroma (Cb, Cr) is sampled against its luma (Y).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum JpegSubsampling {
+    /// Chroma at full resolution: a pixel's three channels stay its own,
+    /// which a representation whose channels mean different things
+    /// (`[|v_d|, |v_c|, f]`) needs; what JPEGs were before this setting.
+    #[default]
+    S444,
+    /// Chroma at half resolution both ways: about 2/3 the bytes and half
+    /// the encoding time, colour edges (the channels' differences) blurred
+    /// over 2×2 pixels.
+    S420,
+}
+
+choices!(JpegSubsampling {
+    S444 => "444", "chroma at full resolution: each pixel's channels stay its own";
+    S420 => "420", "chroma at half resolution both ways: smaller, colour edges blurred";
+});
+
+/// The bytes of a PNG holding an RGB8 image, at the default compression
+/// ([`PngCompression::Fast`]).
 ///
 /// # Panics
 /// If `rgb.len() != 3 · width · height`.
 pub fn encode_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, HostError> {
+    encode_png_with(width, height, rgb, PngCompression::default())
+}
+
+/// [`encode_png`] at `compression`.
+///
+/// # Panics
+/// If `rgb.len() != 3 · width · height`.
+pub fn encode_png_with(
+    width: usize,
+    height: usize,
+    rgb: &[u8],
+    compression: PngCompression,
+) -> Result<Vec<u8>, HostError> {
     assert_eq!(
         rgb.len(),
         3 * width * height,
@@ -166,15 +222,22 @@ pub fn encode_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, Ho
         u32::try_from(width).map_err(|_| too_large())?,
         u32::try_from(height).map_err(|_| too_large())?,
     );
-    let mut png = Vec::new();
-    PngEncoder::new(&mut png)
+    let level = match compression {
+        PngCompression::Fast => CompressionType::Fast,
+        PngCompression::Default => CompressionType::Default,
+        PngCompression::Best => CompressionType::Best,
+    };
+    let mut png = Vec::with_capacity(rgb.len() / 2);
+    PngEncoder::new_with_quality(&mut png, level, FilterType::Adaptive)
         .write_image(rgb, w, h, ExtendedColorType::Rgb8)
         .map_err(|e| HostError::invalid("image", format!("cannot encode PNG: {e}")))?;
     Ok(png)
 }
 
-/// The bytes of a baseline JPEG (4:2:0, the `image` crate's encoder, so
-/// the same bytes on every target) of an RGB8 image at `quality` (1 to 100).
+/// The bytes of a baseline JPEG of an RGB8 image at `quality` (1 to 100:
+/// the IJG scaling of the standard tables, as libjpeg's and the `image`
+/// crate's) with `subsampling`. The `jpeg-encoder` crate's scalar code (its
+/// SIMD path rounds differently), so the same bytes on every target.
 ///
 /// # Panics
 /// If `rgb.len() != 3 · width · height`.
@@ -183,6 +246,7 @@ pub fn encode_jpeg(
     height: usize,
     rgb: &[u8],
     quality: u8,
+    subsampling: JpegSubsampling,
 ) -> Result<Vec<u8>, HostError> {
     assert_eq!(
         rgb.len(),
@@ -195,11 +259,16 @@ pub fn encode_jpeg(
             format!("{width}x{height} is too large for JPEG (65535 a side)"),
         )
     };
-    let side = |n: usize| u16::try_from(n).map(u32::from).map_err(|_| too_large());
+    let side = |n: usize| u16::try_from(n).map_err(|_| too_large());
     let (w, h) = (side(width)?, side(height)?);
-    let mut jpeg = Vec::new();
-    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, quality.clamp(1, 100))
-        .write_image(rgb, w, h, ExtendedColorType::Rgb8)
+    let mut jpeg = Vec::with_capacity(rgb.len() / 4);
+    let mut encoder = jpeg_encoder::Encoder::new(&mut jpeg, quality.clamp(1, 100));
+    encoder.set_sampling_factor(match subsampling {
+        JpegSubsampling::S444 => jpeg_encoder::SamplingFactor::R_4_4_4,
+        JpegSubsampling::S420 => jpeg_encoder::SamplingFactor::R_4_2_0,
+    });
+    encoder
+        .encode(rgb, w, h, jpeg_encoder::ColorType::Rgb)
         .map_err(|e| HostError::invalid("image", format!("cannot encode JPEG: {e}")))?;
     Ok(jpeg)
 }
@@ -212,6 +281,7 @@ pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[u8]) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::{Choice, parse_choice};
 
     fn png(color: ExtendedColorType, w: u32, h: u32, data: &[u8]) -> Vec<u8> {
         let mut out = Vec::new();
@@ -327,6 +397,88 @@ mod tests {
             "{:?}",
             gray.pixels
         );
+    }
+
+    /// A 97×61 RGB8 image of smooth ramps, flat areas and noise: every
+    /// PNG row filter and DEFLATE path gets used.
+    fn textured_rgb() -> (usize, usize, Vec<u8>) {
+        let (w, h) = (97, 61);
+        let mut state = 7u32;
+        let rgb = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = (i % w, i / w);
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let noise = (state >> 24) as u8;
+                [
+                    (x * 2) as u8,
+                    if y < 30 { 90 } else { noise },
+                    (x ^ y) as u8,
+                ]
+            })
+            .collect();
+        (w, h, rgb)
+    }
+
+    #[test]
+    fn png_is_lossless_at_every_compression_and_the_settings_differ() {
+        let (w, h, rgb) = textured_rgb();
+        let mut sizes = Vec::new();
+        for &compression in PngCompression::ALL {
+            let png = encode_png_with(w, h, &rgb, compression).unwrap();
+            let decoded = image::load_from_memory(&png).unwrap();
+            assert_eq!(decoded.as_rgb8().unwrap().as_raw(), &rgb, "{compression:?}");
+            sizes.push(png.len());
+        }
+        assert_ne!(sizes[0], sizes[1], "fast and default are other encoders");
+        assert_eq!(
+            encode_png(w, h, &rgb).unwrap(),
+            encode_png_with(w, h, &rgb, PngCompression::Fast).unwrap()
+        );
+    }
+
+    /// The quantization tables (DQT segments) of a JPEG, in file order.
+    fn dqt(jpeg: &[u8]) -> Vec<Vec<u8>> {
+        let mut tables = Vec::new();
+        let mut at = 2;
+        while at + 4 <= jpeg.len() && jpeg[at] == 0xff && jpeg[at + 1] != 0xda {
+            let len = usize::from(u16::from_be_bytes([jpeg[at + 2], jpeg[at + 3]]));
+            if jpeg[at + 1] == 0xdb {
+                // One or more tables of 1 + 64 bytes (8-bit precision).
+                tables.extend(jpeg[at + 4..at + 2 + len].chunks(65).map(<[u8]>::to_vec));
+            }
+            at += 2 + len;
+        }
+        tables
+    }
+
+    #[test]
+    fn jpeg_quality_means_what_it_meant_and_both_samplings_decode() {
+        let (w, h, rgb) = textured_rgb();
+        for quality in [10, 50, 95, 100] {
+            // The tables of the `image` crate's encoder, which wrote
+            // --image-format jpg before: the IJG scaling of Annex K's.
+            let mut before = Vec::new();
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut before, quality)
+                .write_image(&rgb, w as u32, h as u32, ExtendedColorType::Rgb8)
+                .unwrap();
+            assert_eq!(dqt(&before).len(), 2, "luma and chroma tables");
+            for &subsampling in JpegSubsampling::ALL {
+                let jpeg = encode_jpeg(w, h, &rgb, quality, subsampling).unwrap();
+                assert_eq!(dqt(&jpeg), dqt(&before), "q{quality} {subsampling:?}");
+                let decoded = image::load_from_memory(&jpeg).unwrap().to_rgb8();
+                assert_eq!(decoded.dimensions(), (w as u32, h as u32));
+            }
+        }
+        assert_eq!(
+            parse_choice::<JpegSubsampling>("420"),
+            Ok(JpegSubsampling::S420)
+        );
+        assert!(
+            parse_choice::<JpegSubsampling>("422")
+                .unwrap_err()
+                .contains("444, 420")
+        );
+        assert_eq!(parse_choice("best"), Ok(PngCompression::Best));
     }
 
     #[test]

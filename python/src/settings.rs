@@ -10,7 +10,8 @@ use pyo3::types::{PyDict, PyFloat, PyString, PyTuple};
 use reynoldsflow_core::IntensityScale;
 use reynoldsflow_host::dataset::ItemSettings;
 use reynoldsflow_host::outputs::{
-    self, DEFAULT_JPEG_QUALITY, Fields, ImageFormat, NpyDtype, OutputSpec, Variant,
+    self, DEFAULT_JPEG_QUALITY, Fields, ImageFormat, JpegSubsampling, NpyDtype, OutputSpec,
+    PngCompression, Variant,
 };
 use reynoldsflow_host::pipeline::Compute;
 use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate, Sampling};
@@ -40,6 +41,8 @@ pub const CONVERT_KEYS: &[&str] = &[
     "npy_dtype",
     "image_format",
     "jpeg_quality",
+    "jpeg_subsampling",
+    "png_compression",
     "rep",
     "viz",
     "npy",
@@ -563,9 +566,22 @@ pub fn convert_settings(mut kw: Kwargs<'_>) -> PyResult<(ItemSettings, bool)> {
             )));
         }
     };
-    if jpeg_quality.is_some() && image_format.is_none() {
+    let jpeg_subsampling = kw
+        .get::<String>("jpeg_subsampling")?
+        .map(|name| choice::<JpegSubsampling>("jpeg_subsampling", &name))
+        .transpose()?;
+    let png_compression = kw
+        .get::<String>("png_compression")?
+        .map(|name| choice::<PngCompression>("png_compression", &name))
+        .transpose()?;
+    if (jpeg_quality.is_some() || jpeg_subsampling.is_some()) && image_format.is_none() {
         return Err(value_error(
-            "jpeg_quality applies to image_format='jpg' only",
+            "jpeg_quality and jpeg_subsampling apply to image_format='jpg' only",
+        ));
+    }
+    if png_compression.is_some() && image_format.is_some() {
+        return Err(value_error(
+            "png_compression applies to PNG images; drop it or image_format='jpg'",
         ));
     }
     if npy_dtype.is_some() && npy.is_none() {
@@ -583,9 +599,12 @@ pub fn convert_settings(mut kw: Kwargs<'_>) -> PyResult<(ItemSettings, bool)> {
         hsv_max: call.settings.hsv_max,
         npy_dtype: npy_dtype.unwrap_or_default(),
         image_format: match image_format {
-            None => ImageFormat::Png,
+            None => ImageFormat::Png {
+                compression: png_compression.unwrap_or_default(),
+            },
             Some(()) => ImageFormat::Jpeg {
                 quality: jpeg_quality.unwrap_or(DEFAULT_JPEG_QUALITY),
+                subsampling: jpeg_subsampling.unwrap_or_default(),
             },
         },
     };

@@ -21,7 +21,7 @@
 //! each item's [`Record`] is one JSON line of a [`StatusLog`].
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -93,8 +93,16 @@ impl ItemSettings {
             "flo": names(&spec.flo),
             "image_format": spec.image_format.extension(),
             "jpeg_quality": match spec.image_format {
-                ImageFormat::Jpeg { quality } => Some(quality),
-                ImageFormat::Png => None,
+                ImageFormat::Jpeg { quality, .. } => Some(quality),
+                ImageFormat::Png { .. } => None,
+            },
+            "jpeg_subsampling": match spec.image_format {
+                ImageFormat::Jpeg { subsampling, .. } => Some(subsampling.name()),
+                ImageFormat::Png { .. } => None,
+            },
+            "png_compression": match spec.image_format {
+                ImageFormat::Png { compression } => Some(compression.name()),
+                ImageFormat::Jpeg { .. } => None,
             },
             "keep_count": self.keep_count,
             "max_frames": self.max_frames,
@@ -159,10 +167,21 @@ fn walk(
         return Ok(());
     }
     let mut has_frames = false;
-    let mut entries: Vec<_> = fs::read_dir(dir)
-        .map_err(|e| HostError::io(dir, e))?
-        .filter_map(Result::ok)
-        .collect();
+    let listing = match fs::read_dir(dir) {
+        Ok(listing) => listing,
+        Err(e) if rel.as_os_str().is_empty() => return Err(HostError::io(dir, e)),
+        // A sub-folder that cannot be listed is an item that fails when it
+        // is opened (with this error), not the end of the whole job.
+        Err(_) => {
+            items.push(Item {
+                src: dir.to_owned(),
+                rel: rel.to_owned(),
+                frames: true,
+            });
+            return Ok(());
+        }
+    };
+    let mut entries: Vec<_> = listing.filter_map(Result::ok).collect();
     entries.sort_by_key(|e| e.file_name());
     for entry in entries {
         let name = entry.file_name();
@@ -300,11 +319,18 @@ pub enum Outcome {
     Interrupted,
 }
 
-/// The marker's text: what was made, and with which options (and, when
-/// `--step` or `--fps` picked them, the input frames used).
-fn marker_text(item: &Item, summary: &Summary, options: &str) -> String {
+/// The marker's text: what was made, from which source (its stamp, see
+/// [`source_stamp`]), with which options (and, when `--step` or `--fps`
+/// picked them, the input frames used), and every file with its size.
+fn marker_text(
+    item: &Item,
+    summary: &Summary,
+    options: &str,
+    stamp: &str,
+    files: &[(PathBuf, u64)],
+) -> String {
     let mut text = format!(
-        "reynoldsflow dataset item\nsource: {}\nframes: {}\nresults: {}\noutputs: {}\noptions: {options}\n",
+        "reynoldsflow dataset item\nsource: {}\nsource_stamp: {stamp}\nframes: {}\nresults: {}\noutputs: {}\noptions: {options}\n",
         item.src.display(),
         summary.frames,
         summary.results,
@@ -314,21 +340,37 @@ fn marker_text(item: &Item, summary: &Summary, options: &str) -> String {
         let list: Vec<String> = used.iter().map(usize::to_string).collect();
         text += &format!("source_frames: {}\n", list.join(" "));
     }
+    for (path, size) in files {
+        text += &format!("file: {size} {}\n", path.display());
+    }
     text
 }
 
-/// A finished item's marker: its options line, frames and outputs.
+/// A finished item's marker: its source stamp, options line, frames and
+/// outputs, and its files with their sizes.
 struct Marker {
+    stamp: Option<String>,
     options: String,
     frames: Option<usize>,
     outputs: Option<usize>,
     source_frames: Option<Vec<usize>>,
+    files: Vec<(u64, PathBuf)>,
+}
+
+impl Marker {
+    /// Whether every file the marker lists is in `out` at its size.
+    fn intact(&self, out: &Path) -> bool {
+        self.files.iter().all(|(size, rel)| {
+            fs::metadata(out.join(rel)).is_ok_and(|m| m.is_file() && m.len() == *size)
+        })
+    }
 }
 
 fn finished(out: &Path) -> Option<Marker> {
     let text = fs::read_to_string(out.join(MARKER)).ok()?;
     let field = |name: &str| text.lines().find_map(|l| l.strip_prefix(name));
     Some(Marker {
+        stamp: field("source_stamp: ").map(str::to_owned),
         options: field("options: ")?.to_owned(),
         frames: field("frames: ").and_then(|v| v.parse().ok()),
         outputs: field("outputs: ").and_then(|v| v.parse().ok()),
@@ -337,7 +379,94 @@ fn finished(out: &Path) -> Option<Marker> {
                 .filter_map(|n| n.parse().ok())
                 .collect()
         }),
+        files: text
+            .lines()
+            .filter_map(|l| l.strip_prefix("file: ")?.split_once(' '))
+            .filter_map(|(size, path)| Some((size.parse().ok()?, PathBuf::from(path))))
+            .collect(),
     })
+}
+
+/// What an item's outputs were made from: a video's size and modification
+/// time (nanoseconds since 1970); a frame folder's number of frame files,
+/// their bytes, and a digest (FNV-1a) of each one's name, size and
+/// modification time. A rerun redoes an item whose stamp differs.
+fn source_stamp(item: &Item) -> Result<String, HostError> {
+    let stat = |path: &Path| -> Result<(u64, u128), HostError> {
+        let meta = fs::metadata(path).map_err(|e| HostError::io(path, e))?;
+        let mtime = meta
+            .modified()
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map_or(0, |d| d.as_nanos());
+        Ok((meta.len(), mtime))
+    };
+    if !item.frames {
+        let (size, mtime) = stat(&item.src)?;
+        return Ok(format!("size={size} mtime_ns={mtime}"));
+    }
+    let fnv = |hash: u64, bytes: &[u8]| {
+        bytes.iter().fold(hash, |h, &b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        })
+    };
+    let files = crate::sequence::folder::list(&item.src, |name| is_frame_file(Path::new(name)))?;
+    let (mut bytes, mut digest) = (0, 0xcbf2_9ce4_8422_2325);
+    for file in &files {
+        let (size, mtime) = stat(file)?;
+        let name = file.file_name().unwrap_or_default().as_encoded_bytes();
+        digest = fnv(
+            fnv(fnv(digest, name), &size.to_le_bytes()),
+            &mtime.to_le_bytes(),
+        );
+        bytes += size;
+    }
+    Ok(format!(
+        "frames={} bytes={bytes} digest={digest:016x}",
+        files.len()
+    ))
+}
+
+/// The journal of an item being made: every output file, named before it
+/// is put in place, so that a redo after a kill finds them all.
+pub const JOURNAL: &str = ".reynoldsflow-partial";
+
+/// The sub-folders of an item's folder its side outputs go to, under any
+/// settings.
+const SIDE_FOLDERS: [&str; 4] = ["hsv", "v_c", "v_d", "v_R"];
+
+/// Remove what earlier runs made in `out`: the files `old`'s marker lists
+/// and those a killed run's journal names (nothing else: a folder of an
+/// item inside, or the user's own files, stay), then the marker, then the
+/// side-output folders left empty. Files first: a kill in between leaves a
+/// marker whose files are missing, which is redone.
+fn remove_earlier_outputs(out: &Path, old: Option<&Marker>) -> Result<(), HostError> {
+    let journal = fs::read_to_string(out.join(JOURNAL)).unwrap_or_default();
+    let listed = old
+        .into_iter()
+        .flat_map(|m| m.files.iter().map(|(_, p)| p.as_path()));
+    for rel in listed.chain(journal.lines().map(Path::new)) {
+        // Only paths inside the folder, as this tool writes them.
+        let inside = rel.components().next().is_some()
+            && rel.components().all(|c| matches!(c, Component::Normal(_)));
+        if inside {
+            remove_if_present(&out.join(rel))?;
+        }
+    }
+    remove_if_present(&out.join(MARKER))?;
+    for side in SIDE_FOLDERS {
+        // Fails, as it should, unless the folder is empty.
+        let _ = fs::remove_dir(out.join(side));
+    }
+    Ok(())
+}
+
+/// Remove the file `path`; one already gone is fine.
+fn remove_if_present(path: &Path) -> Result<(), HostError> {
+    match fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(HostError::io(path, e)),
+        _ => Ok(()),
+    }
 }
 
 /// An item's frames, as `dataset` reads them (a frame folder, or a video),
@@ -417,19 +546,29 @@ impl ItemRunner {
         })
     }
 
-    /// One item into the folder `out`: skipped when finished with these
-    /// options, else computed, then marked finished.
+    /// One item into the folder `out`: skipped when finished from the same
+    /// source with these options and all its files there, else made anew
+    /// (what earlier runs left removed first), then marked finished.
     pub fn process(&self, item: &Item, out: &Path, on_output: &mut dyn FnMut()) -> Outcome {
-        if !self.force && finished(out).is_some_and(|m| m.options == self.fingerprint) {
+        // Taken before the source is read: a change while it is read is
+        // seen by the next run.
+        let stamp = source_stamp(item).ok();
+        let old = finished(out);
+        if !self.force
+            && let (Some(marker), Some(stamp)) = (&old, &stamp)
+            && marker.options == self.fingerprint
+            && marker.stamp.as_ref() == Some(stamp)
+            && marker.intact(out)
+        {
             return Outcome::Skipped;
         }
         let result = (|| -> Result<Summary, HostError> {
-            let marker = out.join(MARKER);
-            if marker.exists() {
-                fs::remove_file(&marker).map_err(|e| HostError::io(&marker, e))?;
+            if out.is_dir() {
+                remove_earlier_outputs(out, old.as_ref())?;
             }
             let mut source = open_item(&item.src, item.frames, &self.plan)?;
-            let dir = DirWriter::prepare(out, &self.spec)?;
+            let journal = out.join(JOURNAL);
+            let dir = DirWriter::prepare(out, &self.spec)?.journaled(&journal)?;
             let summary = pipeline::process(
                 &mut *source,
                 &self.compute,
@@ -440,10 +579,11 @@ impl ItemRunner {
             if summary.frames == 0 {
                 return Err(input_error(&item.src, "no frames"));
             }
-            atomic::write_file(
-                &marker,
-                marker_text(item, &summary, &self.fingerprint).as_bytes(),
-            )?;
+            // A source whose stamp could not be taken is never skipped.
+            let stamp = stamp.as_deref().unwrap_or("unknown");
+            let text = marker_text(item, &summary, &self.fingerprint, stamp, &dir.written());
+            atomic::write_file(&out.join(MARKER), text.as_bytes())?;
+            remove_if_present(&journal)?;
             Ok(summary)
         })();
         match result {

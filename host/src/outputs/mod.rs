@@ -9,8 +9,9 @@
 //! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64 (or `--npy-dtype f32`/`f16`: rounded to nearest), shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
 //! | `DIR/v_R/STEM.flo` (or `v_c/`, `v_d/`) | `--flo` (or `--flo=v_c,…`) | Middlebury `.flo` ([`flo`]): `f32` `(u, v)` |
 //!
+//! PNGs are compressed as `--png-compression` says ([`PngCompression`]).
 //! With `--image-format jpg` the images are `STEM.jpg` (baseline JPEG of
-//! `--jpeg-quality`, RGB), not PNGs.
+//! `--jpeg-quality` and `--jpeg-subsampling`, [`JpegSubsampling`]), not PNGs.
 //!
 //! so every kind of output of one frame has the same stem, in a folder of
 //! its own. Each file is written to a hidden temp name in its folder
@@ -22,10 +23,13 @@
 //! ([`StreamFormat`]).
 
 use std::fs;
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use npyz::WriterBuilder;
 
+pub use crate::image_io::{JpegSubsampling, PngCompression};
 use crate::page_buffer::ByteBuffer;
 use crate::settings::choices;
 use crate::{FlowPlanes, HostError, atomic, image_io, viz};
@@ -97,16 +101,28 @@ choices!(NpyDtype {
 });
 
 /// `--image-format`: how images are stored.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
     /// PNG, lossless (`STEM.png`).
-    #[default]
-    Png,
+    Png {
+        /// How hard its DEFLATE works (`--png-compression`).
+        compression: PngCompression,
+    },
     /// Baseline JPEG of this quality, 1 to 100 (`STEM.jpg`), lossy.
     Jpeg {
         /// The encoder's quality, 1 to 100.
         quality: u8,
+        /// The chroma sampling (`--jpeg-subsampling`).
+        subsampling: JpegSubsampling,
     },
+}
+
+impl Default for ImageFormat {
+    fn default() -> Self {
+        ImageFormat::Png {
+            compression: PngCompression::default(),
+        }
+    }
 }
 
 /// `--image-format`'s names on the command line.
@@ -130,7 +146,7 @@ impl ImageFormat {
     /// The file extension.
     pub fn extension(self) -> &'static str {
         match self {
-            ImageFormat::Png => "png",
+            ImageFormat::Png { .. } => "png",
             ImageFormat::Jpeg { .. } => "jpg",
         }
     }
@@ -138,8 +154,13 @@ impl ImageFormat {
     /// An RGB8 image of `width × height` in this format.
     pub fn encode(self, width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, HostError> {
         match self {
-            ImageFormat::Png => image_io::encode_png(width, height, rgb),
-            ImageFormat::Jpeg { quality } => image_io::encode_jpeg(width, height, rgb, quality),
+            ImageFormat::Png { compression } => {
+                image_io::encode_png_with(width, height, rgb, compression)
+            }
+            ImageFormat::Jpeg {
+                quality,
+                subsampling,
+            } => image_io::encode_jpeg(width, height, rgb, quality, subsampling),
         }
     }
 }
@@ -229,7 +250,7 @@ impl Default for OutputSpec {
             flo: Vec::new(),
             hsv_max: None,
             npy_dtype: NpyDtype::F64,
-            image_format: ImageFormat::Png,
+            image_format: ImageFormat::default(),
         }
     }
 }
@@ -348,8 +369,20 @@ impl OutputSpec {
         if self.npy_dtype != NpyDtype::F64 {
             line += &format!(" npy_dtype={}", self.npy_dtype.name());
         }
-        if let ImageFormat::Jpeg { quality } = self.image_format {
-            line += &format!(" image=jpg:{quality}");
+        match self.image_format {
+            ImageFormat::Png { compression } if compression != PngCompression::default() => {
+                line += &format!(" png={}", compression.name());
+            }
+            ImageFormat::Png { .. } => {}
+            ImageFormat::Jpeg {
+                quality,
+                subsampling,
+            } => {
+                line += &format!(" image=jpg:{quality}");
+                if subsampling != JpegSubsampling::default() {
+                    line += &format!(":{}", subsampling.name());
+                }
+            }
         }
         line
     }
@@ -501,6 +534,16 @@ fn y4m_frame_write(rgb: &[u8], out: &mut [u8]) {
 pub struct DirWriter {
     root: PathBuf,
     spec: OutputSpec,
+    journal: Option<Mutex<Journal>>,
+}
+
+/// The files a [`DirWriter`] has written, each named in the journal file
+/// before it appears under its final name: a killed run's outputs can be
+/// found and removed by the next one ([`DirWriter::journaled`]).
+#[derive(Debug)]
+struct Journal {
+    file: fs::File,
+    written: Vec<(PathBuf, u64)>,
 }
 
 impl DirWriter {
@@ -536,7 +579,54 @@ impl DirWriter {
         Ok(Self {
             root: root.to_owned(),
             spec: spec.clone(),
+            journal: None,
         })
+    }
+
+    /// Name every file in `journal` (created afresh), one path relative to
+    /// the output folder a line, before the file is put in place; and keep
+    /// their sizes for [`Self::written`].
+    pub fn journaled(mut self, journal: &Path) -> Result<Self, HostError> {
+        let file = fs::File::create(journal).map_err(|e| HostError::io(journal, e))?;
+        self.journal = Some(Mutex::new(Journal {
+            file,
+            written: Vec::new(),
+        }));
+        Ok(self)
+    }
+
+    /// Every file written so far with its size in bytes, sorted by path
+    /// (empty unless [`Self::journaled`]).
+    pub fn written(&self) -> Vec<(PathBuf, u64)> {
+        let Some(journal) = &self.journal else {
+            return Vec::new();
+        };
+        let mut files = journal
+            .lock()
+            .expect("no panics holding it")
+            .written
+            .clone();
+        files.sort();
+        files
+    }
+
+    /// Write `bytes` to the output folder's `rel`, named in the journal first.
+    fn put(&self, rel: &Path, bytes: &[u8]) -> Result<(), HostError> {
+        let path = self.root.join(rel);
+        let Some(journal) = &self.journal else {
+            return atomic::write_file(&path, bytes);
+        };
+        let line = format!("{}\n", rel.display());
+        journal
+            .lock()
+            .expect("no panics holding it")
+            .file
+            .write_all(line.as_bytes())
+            .map_err(|e| HostError::io(&path, e))?;
+        atomic::write_file(&path, bytes)?;
+        let mut journal = journal.lock().expect("no panics holding it");
+        journal.written.push((rel.to_owned(), bytes.len() as u64));
+        Ok(())
     }
 
     /// The output folder.
@@ -575,7 +665,7 @@ impl DirWriter {
         #[cfg(feature = "crash-injection")]
         crash_injection::abort_hook(&self.root, files);
         for (rel, bytes) in files {
-            atomic::write_file(&self.root.join(rel), bytes)?;
+            self.put(rel, bytes)?;
         }
         Ok(())
     }
@@ -595,8 +685,7 @@ impl DirWriter {
                     continue;
                 }
                 let bytes = fs::read(&src).map_err(|e| HostError::io(&src, e))?;
-                let dst = src.with_file_name(format!("{to}.{ext}"));
-                atomic::write_file(&dst, &bytes)?;
+                self.put(&Path::new(dir).join(format!("{to}.{ext}")), &bytes)?;
             }
         }
         Ok(())
