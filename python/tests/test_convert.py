@@ -118,3 +118,34 @@ def test_ray_recipe_outputs_equal_the_cli_dataset(cli, tmp_path):
     lines = records((tmp_path / "status.jsonl").read_text())
     assert sorted(r["status"] for r in lines) == ["done"] * 4
     assert ray.__version__
+
+
+@pytest.mark.parametrize(
+    "keywords, flags",
+    [
+        ({"png_compression": "best"}, ["--png-compression", "best"]),
+        ({"image_format": "jpg", "jpeg_subsampling": "420"}, ["--image-format", "jpg", "--jpeg-subsampling", "420"]),
+    ],
+)
+def test_convert_encodes_as_the_cli_does(cli, tmp_path, keywords, flags):
+    src = tmp_path / "clip.y4m"
+    write_y4m(src, clip(5, 40, 24))
+    res = subprocess.run([str(cli), "run", str(src), "--out", str(tmp_path / "cli"), *flags],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert rf.convert(src, tmp_path / "py", **keywords)["status"] == "done"
+    images = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
+    assert images and images == sorted(p.name for p in (tmp_path / "py").iterdir() if not p.name.startswith("."))
+    for name in images:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+
+
+def test_convert_refuses_encoder_keywords_of_the_other_format(tmp_path):
+    src = tmp_path / "clip.y4m"
+    write_y4m(src, clip(3, 16, 16))
+    with pytest.raises(ValueError, match="jpeg_subsampling"):
+        rf.convert(src, tmp_path / "a", jpeg_subsampling="420")
+    with pytest.raises(ValueError, match="png_compression"):
+        rf.convert(src, tmp_path / "b", image_format="jpg", png_compression="best")
+    with pytest.raises(ValueError, match="png_compression"):
+        rf.convert(src, tmp_path / "c", png_compression="9")

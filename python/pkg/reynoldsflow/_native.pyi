@@ -226,6 +226,8 @@ def convert(
     flo: Union[None, bool, str, Sequence[str]] = None,
     image_format: Literal["png", "jpg"] = "png",
     jpeg_quality: int = 95,
+    jpeg_subsampling: Literal["444", "420"] = "444",
+    png_compression: Literal["fast", "default", "best"] = "fast",
     keep_count: bool = False,
     max_frames: Optional[int] = None,
     step: Optional[int] = None,
@@ -247,8 +249,11 @@ def convert(
     skipped when run again with the same options; force=True redoes it.
     npy=True writes v_c, v_d and v_R as .npy (or name them: "v_R" or
     ["v_c", "v_R"]); flo=True writes v_R as .flo. npy_dtype, image_format,
-    jpeg_quality, step, fps, resize and short_side are the command line's
-    flags of the same names. Returns the status record; an input that
+    jpeg_quality, jpeg_subsampling ("444": each pixel's channels kept apart;
+    "420": smaller, colour edges blurred), png_compression ("fast", fdeflate;
+    "default" and "best", zlib's levels: the same pixels, smaller files,
+    more time), step, fps, resize and short_side are the command line's
+    flags of the same names (docs/datasets.md). Returns the status record; an input that
     cannot be read gives status "failed" with the reason in "error"; a bad
     option raises."""
 
