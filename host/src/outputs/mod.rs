@@ -540,9 +540,13 @@ pub struct DirWriter {
 /// The files a [`DirWriter`] has written, each named in the journal file
 /// before it appears under its final name: a killed run's outputs can be
 /// found and removed by the next one ([`DirWriter::journaled`]).
+///
+/// The journal is opened for each line and closed again: a file held open
+/// for writing through a whole item would, for one, keep its file system
+/// from being remounted read-only between two outputs.
 #[derive(Debug)]
 struct Journal {
-    file: fs::File,
+    path: PathBuf,
     written: Vec<(PathBuf, u64)>,
 }
 
@@ -587,9 +591,9 @@ impl DirWriter {
     /// the output folder a line, before the file is put in place; and keep
     /// their sizes for [`Self::written`].
     pub fn journaled(mut self, journal: &Path) -> Result<Self, HostError> {
-        let file = fs::File::create(journal).map_err(|e| HostError::io(journal, e))?;
+        fs::File::create(journal).map_err(|e| HostError::io(journal, e))?;
         self.journal = Some(Mutex::new(Journal {
-            file,
+            path: journal.to_owned(),
             written: Vec::new(),
         }));
         Ok(self)
@@ -617,12 +621,14 @@ impl DirWriter {
             return atomic::write_file(&path, bytes);
         };
         let line = format!("{}\n", rel.display());
-        journal
-            .lock()
-            .expect("no panics holding it")
-            .file
-            .write_all(line.as_bytes())
-            .map_err(|e| HostError::io(&path, e))?;
+        {
+            let journal = journal.lock().expect("no panics holding it");
+            fs::OpenOptions::new()
+                .append(true)
+                .open(&journal.path)
+                .and_then(|mut file| file.write_all(line.as_bytes()))
+                .map_err(|e| HostError::io(&journal.path, e))?;
+        }
         atomic::write_file(&path, bytes)?;
         let mut journal = journal.lock().expect("no panics holding it");
         journal.written.push((rel.to_owned(), bytes.len() as u64));
