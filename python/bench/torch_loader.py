@@ -18,7 +18,7 @@ once, not every epoch), and for each mode:
   training example).
 - per="clip", batch_size=None: one (T - 1, 3, H, W) tensor per clip, one
   message a clip, written by the core straight into new shared memory.
-  Its ratio is the figure, printed as dataloader_vs_represent_clip=.
+  Its wall-clock ratio is printed last, as dataloader_vs_represent_clip=.
 
 Every mode sends through torch's own shared memory, new for every message:
 no memory is reused while a tensor can still see it.
@@ -27,7 +27,9 @@ Each round times one epoch of every mode and one represent_clip call per
 clip, in turn; the medians are printed with their ratio to represent_clip,
 and beside them the CPU time a pair of every process involved (this one
 and its workers; Linux's /proc), which another program's load changes
-little: on a busy machine, compare those.
+little: on a busy machine, compare those (the README's figure:
+represent_clip's CPU a pair against per="clip"'s, the ratio printed beside
+it).
 Items go to workers by the hash of `reynoldsflow dataset --shard`, so a
 worker's share is not exactly even: the split is printed too. A bench, not
 a test.
