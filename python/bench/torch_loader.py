@@ -11,22 +11,25 @@ docs/python.md shows: --workers workers, persistent_workers=True (started
 once, not every epoch), and for each mode:
 
 - per="pair", batch_size=None: one message to the main process per pair,
-  most by slot; torch still spends about half a millisecond of CPU on each
-  message.
-- per="pair", batch_size=--batch: the default collate batches pairs in the
-  worker, one message a batch.
-- per="pair", batch_size=--batch, collate_fn=reynoldsflow.torch.collate:
-  the batches stacked in the worker's reused slots (the docs' training
-  example).
+  each pair copied into new shared memory by torch; torch also spends about
+  half a millisecond of CPU on each message.
+- per="pair", batch_size=--batch: the default collate stacks the pairs in
+  the worker into new shared memory, one message a batch (the docs'
+  training example).
 - per="clip", batch_size=None: one (T - 1, 3, H, W) tensor per clip, one
-  message a clip, made in the worker's reused slots (reynoldsflow/_slots.py).
-  Its ratio is the figure, printed as dataloader_vs_represent_clip=.
+  message a clip, written by the core straight into new shared memory.
+  Its wall-clock ratio is printed last, as dataloader_vs_represent_clip=.
+
+Every mode sends through torch's own shared memory, new for every message:
+no memory is reused while a tensor can still see it.
 
 Each round times one epoch of every mode and one represent_clip call per
 clip, in turn; the medians are printed with their ratio to represent_clip,
 and beside them the CPU time a pair of every process involved (this one
 and its workers; Linux's /proc), which another program's load changes
-little: on a busy machine, compare those.
+little: on a busy machine, compare those (the README's figure:
+represent_clip's CPU a pair against per="clip"'s, the ratio printed beside
+it).
 Items go to workers by the hash of `reynoldsflow dataset --shard`, so a
 worker's share is not exactly even: the split is printed too. A bench, not
 a test.
@@ -46,7 +49,7 @@ from pathlib import Path
 from torch.utils.data import DataLoader
 
 import reynoldsflow as rf
-from reynoldsflow.torch import ReynoldsFlowDataset, collate
+from reynoldsflow.torch import ReynoldsFlowDataset
 # The moving texture of the other bench (this folder is on sys.path when
 # a bench runs as a script).
 from throughput import moving_clip
@@ -89,14 +92,13 @@ def main() -> int:
         for i, c in enumerate(clips):
             write_y4m(root / f"clip{i:04d}.y4m", c)
 
-        def loader(per: str, batch_size, **kw):
+        def loader(per: str, batch_size):
             return DataLoader(ReynoldsFlowDataset(root, per=per), batch_size=batch_size,
-                              num_workers=args.workers, persistent_workers=True, **kw)
+                              num_workers=args.workers, persistent_workers=True)
 
         modes = {
             'per="pair", batch_size=None': loader("pair", None),
             f'per="pair", batch_size={args.batch}': loader("pair", args.batch),
-            f'per="pair", batch_size={args.batch}, collate_fn=collate': loader("pair", args.batch, collate_fn=collate),
             'per="clip", batch_size=None': loader("clip", None),
         }
 

@@ -9,7 +9,7 @@ import torch
 from torch.utils.data import DataLoader
 
 import reynoldsflow as rf
-from reynoldsflow import _native, _slots
+from reynoldsflow import _native
 from reynoldsflow.torch import ReynoldsFlow, ReynoldsFlowDataset, collate, shard_of_this_process
 from conftest import clip, moving_frame, write_pgm, write_y4m
 
@@ -178,44 +178,8 @@ def test_two_workers_yield_every_pair_exactly_once(six_clips):
     assert tuple(batches[0][0].shape[1:]) == (3, 24, 40)
 
 
-class SlotInWorker(ReynoldsFlowDataset):
-    """Notes in meta whether each tensor was made in a worker's slot."""
-
-    def __iter__(self):
-        for reps, meta in super().__iter__():
-            yield reps, {**meta, "slot": isinstance(reps, _slots.SlotTensor)}
-
-
-def test_clips_from_workers_travel_in_reused_slots(twenty_clips):
-    root, frames = twenty_clips
-    before = set(_slots._received.slots)
-    got = {}
-    loader = DataLoader(SlotInWorker(root, per="clip"), batch_size=None, num_workers=2)
-    for reps, meta in loader:
-        # Made in a slot in the worker; here a plain tensor over its mapping.
-        assert meta["slot"] and type(reps) is torch.Tensor, meta["source"]
-        got[meta["source"]] = reps.numpy().copy()
-        del reps
-    assert set(got) == set(frames)
-    for source, c in frames.items():
-        assert np.array_equal(got[source], rf.represent_clip(c, layout="chw")), source
-    # Each clip let go before the next: a few slots a worker carried all 20.
-    used = set(_slots._received.slots) - before
-    assert 2 <= len(used) <= 2 * 4, used
-    # Pairs too, a few slots at a time (the others in private memory); in
-    # the main process (no worker) a clip is a plain tensor.
-    pairs = [(meta, rep.numpy().copy()) for rep, meta in
-             DataLoader(SlotInWorker(root), batch_size=None, num_workers=2)]
-    assert len(pairs) == 20 * 3 and any(meta["slot"] for meta, _ in pairs)
-    for meta, rep in pairs:
-        a, b = meta["frames"]
-        assert np.array_equal(rep, got[meta["source"]][a]), meta
-    assert not any(meta["slot"] for _, meta in SlotInWorker(root, per="clip"))
-
-
 class SendsTwice(ReynoldsFlowDataset):
-    """Worker code that sends each clip twice, then a view of it that torch
-    sends its own way."""
+    """Worker code that sends each clip twice, then a view of it."""
 
     def __iter__(self):
         for reps, meta in super().__iter__():
@@ -236,18 +200,17 @@ class KeepsInWorker(ReynoldsFlowDataset):
         yield torch.zeros(0), {"intact": all(torch.equal(a, b) for a, b in kept), "count": len(kept)}
 
 
-def test_no_slot_is_written_while_either_side_holds_it(twenty_clips):
+def test_clips_stay_whole_however_either_side_holds_them(twenty_clips):
     root, frames = twenty_clips
     expected = {s: rf.represent_clip(c, layout="chw") for s, c in frames.items()}
-    # The main process holds every clip: no slot comes back, the pool fills
-    # and further clips go through torch's shared memory; none changes.
+    # The main process holds every clip; none changes.
     held = [(meta["source"], reps) for reps, meta in
             DataLoader(ReynoldsFlowDataset(root, per="clip"), batch_size=None, num_workers=2)]
     assert len(held) == len(frames)
     for source, reps in held:
         assert np.array_equal(reps.numpy(), expected[source]), source
-    # A clip sent twice stays whole while one copy of it is held; a view
-    # that torch sends is copied, not aliased.
+    # A clip sent twice stays whole while one copy of it is held, and so
+    # does a view of it sent on its own.
     keep = []
     for reps, meta in DataLoader(SendsTwice(root, per="clip"), batch_size=None, num_workers=2):
         keep.append((meta, reps if meta.get("view") or len(keep) % 3 == 1 else None))
@@ -256,47 +219,40 @@ def test_no_slot_is_written_while_either_side_holds_it(twenty_clips):
         if reps is not None:
             want = expected[meta["source"]]
             assert np.array_equal(reps.numpy(), want[1:] if meta.get("view") else want), meta["source"]
-    # Clips kept in the worker keep their slots there, though the main
-    # process lets go of each at once.
+    # Clips kept in the worker stay whole there, though the main process
+    # lets go of each at once.
     ends = [meta for _, meta in DataLoader(KeepsInWorker(root, per="clip"), batch_size=None, num_workers=2)
             if "intact" in meta]
     assert [e["intact"] for e in ends] == [True, True] and sum(e["count"] for e in ends) == len(frames)
 
 
-def test_epochs_of_new_workers_do_not_pile_up_slots(twenty_clips):
+def test_every_epoch_of_new_workers_yields_every_clip(twenty_clips):
     root, frames = twenty_clips
+    expected = {s: rf.represent_clip(c, layout="chw") for s, c in frames.items()}
     loader = DataLoader(ReynoldsFlowDataset(root, per="clip"), batch_size=None, num_workers=2)
     for _ in range(4):
-        assert sum(1 for _ in loader) == len(frames)
-    # The pools of exited workers are forgotten when new ones arrive.
-    assert len(_slots._received.slots) <= 2 * _slots.MAX_SLOTS
+        got = {meta["source"]: reps.numpy().copy() for reps, meta in loader}
+        assert sorted(got) == sorted(expected)
+        for source, reps in got.items():
+            assert np.array_equal(reps, expected[source]), source
 
 
-def test_clips_of_ever_larger_sizes_replace_slots(tmp_path):
+def test_clips_of_ever_larger_sizes_come_whole(tmp_path):
     expected = {}
     for i in range(12):
         c = np.stack([moving_frame(16 + 8 * i, 12, k, seed=i) for k in range(3)])
         write_y4m(tmp_path / f"clip{i:02d}.y4m", c)
         expected[f"clip{i:02d}.y4m"] = rf.represent_clip(c, layout="chw")
-    before = set(_slots._received.slots)
     loader = DataLoader(ReynoldsFlowDataset(tmp_path, per="clip"), batch_size=None, num_workers=1,
                         persistent_workers=True)
-    for reps, meta in loader:
-        assert np.array_equal(reps.numpy(), expected[meta["source"]]), meta["source"]
-    # No smaller slot fits a larger clip: the worker drops idle slots to
-    # make new ones, and the main process forgets what it dropped.
-    assert len(set(_slots._received.slots) - before) <= _slots.MAX_SLOTS
+    for _ in range(2):
+        got = {meta["source"]: reps.numpy().copy() for reps, meta in loader}
+        assert sorted(got) == sorted(expected)
+        for source, reps in got.items():
+            assert np.array_equal(reps, expected[source]), source
 
 
-class CollatedInSlot(ReynoldsFlowDataset):
-    """Yields whether `collate` stacked a batch in a slot, in the worker."""
-
-    def __iter__(self):
-        pairs = list(super().__iter__())[:4]
-        yield isinstance(collate(pairs)[0], _slots.SlotTensor)
-
-
-def test_collate_gives_default_collates_batches_stacked_in_slots(twenty_clips):
+def test_collate_gives_default_collates_batches(twenty_clips):
     root, _ = twenty_clips
 
     def batches(**kw):
@@ -309,9 +265,7 @@ def test_collate_gives_default_collates_batches_stacked_in_slots(twenty_clips):
         assert torch.equal(reps, want)
         assert meta["source"] == want_meta["source"] and meta["path"] == want_meta["path"]
         assert all(torch.equal(a, b) for a, b in zip(meta["frames"], want_meta["frames"]))
-    # In a worker the batch is made in a slot; in the main process (no
-    # worker) it is default_collate's.
-    assert next(iter(DataLoader(CollatedInSlot(root), batch_size=None, num_workers=1)))
+    # In the main process too (no worker).
     pairs = list(ReynoldsFlowDataset(root, max_frames=3))[:4]
     here = collate(pairs)[0]
     assert type(here) is torch.Tensor and torch.equal(here, torch.stack([rep for rep, _ in pairs]))

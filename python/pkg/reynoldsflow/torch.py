@@ -35,7 +35,6 @@ except ImportError as e:  # pragma: no cover - exercised without torch only
 import numpy
 
 import reynoldsflow as _rf
-from reynoldsflow import _slots
 from reynoldsflow._core_params import SETTING_KEYS as _SETTING_KEYS, core_constants as _core_constants
 from reynoldsflow._torch_batch import represent_batch
 
@@ -54,15 +53,11 @@ def _threads_here(threads: Optional[int]) -> Optional[int]:
 
 
 def _result_tensor(shape: Tuple[int, ...]) -> "torch.Tensor":
-    """An uninitialised uint8 tensor of ``shape`` for a result to be written
-    into. Inside a ``DataLoader`` worker it is in one of the worker's slots
-    (``reynoldsflow._slots``), which the main process keeps mapped; when
-    every slot is in use, in torch's shared memory, as ``default_collate``
-    makes its batches (sending it then passes its memory, where a tensor in
-    private memory would first be copied into a new shared segment)."""
-    reps = _slots.slot_tensor(shape)
-    if reps is not None:
-        return reps
+    """An uninitialised uint8 tensor of ``shape`` for a clip's results to be
+    written into. Inside a ``DataLoader`` worker it is in torch's shared
+    memory, as ``default_collate`` makes its batches: sending it passes that
+    memory, which is the clip's alone, where a tensor in private memory
+    would first be copied into new shared memory."""
     if get_worker_info() is None:
         return torch.empty(shape, dtype=torch.uint8)
     # A private method of torch's (default_collate's way to shared memory):
@@ -150,17 +145,10 @@ class ReynoldsFlow:
 
 
 def collate(batch: Sequence[Tuple["torch.Tensor", Dict[str, Any]]]) -> Any:
-    """A ``DataLoader`` ``collate_fn`` for batches of ``(rep, meta)`` pairs:
-    what ``default_collate`` gives (the images stacked, ``(B, 3, H, W)``,
-    and the metas collated), with the images stacked in one of the worker's
-    reused slots (``reynoldsflow._slots``) rather than in new shared memory
-    each batch: ``DataLoader(dataset, batch_size=32, collate_fn=collate)``."""
-    reps = [rep for rep, _ in batch]
-    if reps and all(r.shape == reps[0].shape and r.dtype == torch.uint8 for r in reps):
-        out = _slots.slot_tensor((len(reps),) + tuple(reps[0].shape))
-        if out is not None:
-            torch.stack(reps, out=out)
-            return [out, default_collate([meta for _, meta in batch])]
+    """``default_collate``: the images of ``(rep, meta)`` pairs stacked,
+    ``(B, 3, H, W)``, and the metas collated. The ``DataLoader`` default
+    already does this, so ``collate_fn`` can be left out; the name stays so
+    that code passing ``collate_fn=collate`` keeps working."""
     return default_collate(batch)
 
 
@@ -278,14 +266,9 @@ class ReynoldsFlowDataset(IterableDataset):
                 stream.push(frame)
             else:
                 # A frame of another size raises, as `reynoldsflow run` refuses it.
-                # In a worker, a few pairs at a time in slots (an unbatched
-                # pair goes to the main process by slot); the others in
-                # private memory, which a collate copies into its batch.
-                rep = _slots.slot_tensor((3, h, w), _slots.PAIR_SLOTS)
-                if rep is None:
-                    rep = torch.from_numpy(stream.push(frame))
-                else:
-                    stream.push(frame, out=rep)
+                # Private memory: a batch's collate copies its pairs into the
+                # batch's shared memory (unbatched, torch copies each pair).
+                rep = torch.from_numpy(stream.push(frame))
                 yield rep, {**meta, "frames": (prev, index)}
             prev = index
 
