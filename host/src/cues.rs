@@ -76,7 +76,7 @@ impl Cues {
                         rows: height.div_ceil(CELL),
                     }
                 })?;
-                Box::new(Grid::new(&config, self.params)?)
+                new_grid(config, self.params)?
             }
         };
         let grid = &mut self.grid.insert(((width, height), grid)).1;
@@ -102,6 +102,23 @@ impl Cues {
             .as_ref()
             .map_or(0.0, |(_, grid)| grid.last_frame().level.to_num())
     }
+}
+
+/// A grid for frames of `config`'s size, built on a thread with room for
+/// it: the cues crate builds it by value (512 KiB), and an unoptimised
+/// build copies it more than once on its way to the heap, past the 2 MiB
+/// of stack a test's (or a small streaming) thread has.
+fn new_grid(config: Config, params: CueParams) -> Result<Box<Grid>, CueError> {
+    let build = move || Grid::new(&config, params).map(Box::new);
+    std::thread::scope(|scope| {
+        let roomy = std::thread::Builder::new().stack_size(16 << 20);
+        match roomy.spawn_scoped(scope, build) {
+            Ok(thread) => thread
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+            Err(_) => build(),
+        }
+    })
 }
 
 /// A region as the front ends report it: its box in pixels, its area
@@ -163,18 +180,6 @@ mod tests {
             .collect()
     }
 
-    /// Run `test` with room for the grid, which the cues crate builds by
-    /// value (512 KiB; an unoptimised build copies it more than once on the
-    /// way to its box, past a test thread's 2 MiB of stack).
-    fn with_stack(test: fn()) {
-        std::thread::Builder::new()
-            .stack_size(16 << 20)
-            .spawn(test)
-            .unwrap()
-            .join()
-            .unwrap();
-    }
-
     fn magnitudes<'a>(
         w: usize,
         h: usize,
@@ -193,7 +198,7 @@ mod tests {
 
     #[test]
     fn a_moving_box_is_one_region_with_its_pixel_box() {
-        with_stack(|| {
+        {
             let mut cues = Cues::new(&Settings::default()).unwrap();
             let (w, h) = (64, 40);
             let (m_c, zeros, luma) = (
@@ -225,7 +230,7 @@ mod tests {
                 cues.regions(&magnitudes(w, h, &wide, &wide, &luma)),
                 Err(CueError::GridTooSmall { .. })
             ));
-        });
+        }
     }
 
     #[test]
