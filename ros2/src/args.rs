@@ -5,10 +5,8 @@
 use clap::Parser;
 use reynoldsflow_core::IntensityScale;
 use reynoldsflow_host::outputs::Variant;
-use reynoldsflow_host::settings::{self, FirstFrame, ScaleArg, Settings, parse_choice};
+use reynoldsflow_host::settings::{self, FirstFrame, ScaleArg, Setting, Settings, parse_choice};
 use ros2_client::Name;
-
-use crate::cues::CueSettings;
 
 /// Shown by `--help` below the flags.
 const AFTER_HELP: &str = "\
@@ -115,6 +113,22 @@ pub struct Args {
     pub cue_min_area: u32,
 }
 
+/// The node's flag for a host setting, as its messages name it (the
+/// settings it has no flag for keep the host's names).
+pub fn flag(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Scale => "--scale",
+        Setting::IntensityScale => "--intensity-scale",
+        Setting::Lambda => "--lambda",
+        Setting::Variant => "--variant",
+        Setting::Threads => "--threads",
+        Setting::FirstFrame => "--first-frame",
+        Setting::CueThreshold => "--cue-threshold",
+        Setting::CueMinArea => "--cue-min-area",
+        setting => setting.name(),
+    }
+}
+
 /// The topics, resolved to absolute names.
 #[derive(Clone, Debug)]
 pub struct Topics {
@@ -136,15 +150,9 @@ impl Args {
             variant: self.variant,
             threads: self.threads.map(|n| n as usize),
             first_frame: self.first_frame,
+            cue_threshold: self.cue_threshold,
+            cue_min_area: self.cue_min_area,
             ..Settings::default()
-        }
-    }
-
-    /// The cues' settings.
-    pub fn cue_settings(&self) -> CueSettings {
-        CueSettings {
-            threshold: self.cue_threshold,
-            min_area: self.cue_min_area,
         }
     }
 
