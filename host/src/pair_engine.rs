@@ -460,26 +460,16 @@ impl Sink for TileRows<'_> {
 
     #[inline(always)]
     fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<ExtremesSink>) {
-        if let Some(extremes) = extremes {
-            self.extremes.merge(extremes);
-            return;
-        }
         let (x0, y0) = self.origin;
-        let (Some(row), Some(start)) = (y.checked_sub(y0), x.checked_sub(x0)) else {
-            return;
-        };
-        let range = start..start + luma.len();
-        let m_d = self.m_d.get(row).and_then(|r| r.get(range.clone()));
-        let m_c = self.m_c.get(row).and_then(|r| r.get(range));
-        if let (Some(m_d), Some(m_c)) = (m_d, m_c) {
-            let pixels = Pixels {
-                m_d,
-                m_c,
-                luma,
-                fields: None,
-            };
-            self.extremes.row(y, x, pixels);
-        }
+        let rows = y
+            .checked_sub(y0)
+            .zip(x.checked_sub(x0))
+            .and_then(|(row, start)| {
+                let range = start..start + luma.len();
+                let m_d = self.m_d.get(row)?.get(range.clone())?;
+                Some((m_d, self.m_c.get(row)?.get(range)?))
+            });
+        fixed_engine::add_kept_row(&mut self.extremes, (y, x), luma, rows, extremes);
     }
 }
 

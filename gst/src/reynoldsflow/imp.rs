@@ -146,14 +146,20 @@ struct State {
     stream: PairStream<Stamps>,
     /// Outputs made from the last input, not yet handed downstream.
     pending: VecDeque<Pending>,
+    pairs: Pairs,
+    /// The next output follows a reset.
+    discont: bool,
+}
+
+/// What computes the pairs.
+#[derive(Default)]
+struct Pairs {
     /// The engine and the properties generation it was built for.
     engine: Option<(u64, PairEngine)>,
     /// The cues and the generation they were built for.
     cues: Option<(u64, Cues)>,
     /// An image's rows where the output's have padding.
     scratch: Vec<u8>,
-    /// The next output follows a reset.
-    discont: bool,
 }
 
 impl Default for State {
@@ -163,9 +169,7 @@ impl Default for State {
             out_info: None,
             stream: PairStream::new(values::DEFAULT_FIRST_FRAME),
             pending: VecDeque::new(),
-            engine: None,
-            cues: None,
-            scratch: Vec::new(),
+            pairs: Pairs::default(),
             discont: true,
         }
     }
@@ -176,7 +180,7 @@ impl State {
     fn reset(&mut self) {
         self.stream.reset();
         self.pending.clear();
-        self.cues = None;
+        self.pairs.cues = None;
         self.discont = true;
     }
 }
@@ -624,18 +628,12 @@ impl ReynoldsFlow {
             stamp: stamps.pts.map(|t| i128::from(t.nseconds())),
             label: stamps,
         };
-        let State {
-            stream,
-            engine,
-            cues,
-            scratch,
-            out_info,
-            ..
-        } = state;
-        let out_info = out_info.as_ref().ok_or(gst::FlowError::NotNegotiated)?;
-        let step = stream.push(frame, |prev, next| {
-            self.pair(engine, cues, scratch, out_info, prev, next)
-        })?;
+        let (stream, pairs) = (&mut state.stream, &mut state.pairs);
+        let out_info = state
+            .out_info
+            .as_ref()
+            .ok_or(gst::FlowError::NotNegotiated)?;
+        let step = stream.push(frame, |prev, next| self.pair(pairs, out_info, prev, next))?;
         if let Some(restart) = &step.restart {
             gst::info!(CAT, imp = self, "the pair chain restarts: {restart}");
         }
@@ -648,17 +646,18 @@ impl ReynoldsFlow {
         let settings = properties
             .settings()
             .map_err(|e| self.fail(gst::LibraryError::Settings, &e))?;
-        if state.engine.as_ref().is_none_or(|(g, _)| *g != generation) {
+        let pairs = &mut state.pairs;
+        if pairs.engine.as_ref().is_none_or(|(g, _)| *g != generation) {
             let engine = PairEngine::new(&settings)
                 .map_err(|e| self.fail(gst::LibraryError::Settings, &e))?
                 .keep_magnitudes(properties.cues);
-            state.engine = Some((generation, engine));
+            pairs.engine = Some((generation, engine));
         }
-        let built = state.cues.as_ref().is_some_and(|(g, _)| *g == generation);
+        let built = pairs.cues.as_ref().is_some_and(|(g, _)| *g == generation);
         if properties.cues && !built {
             let cues =
                 Cues::new(&settings).map_err(|e| self.fail(gst::LibraryError::Settings, &e))?;
-            state.cues = Some((generation, cues));
+            pairs.cues = Some((generation, cues));
         }
         state.stream.set_first_frame(settings.first_frame);
         Ok(())
@@ -671,20 +670,12 @@ impl ReynoldsFlow {
     }
 
     fn end_locked(&self, state: &mut State) -> Result<(), gst::FlowError> {
-        let State {
-            stream,
-            engine,
-            cues,
-            scratch,
-            out_info,
-            ..
-        } = state;
-        let Some(out_info) = out_info.as_ref() else {
+        let (stream, pairs) = (&mut state.stream, &mut state.pairs);
+        let Some(out_info) = state.out_info.as_ref() else {
             stream.reset();
             return Ok(());
         };
-        let owed =
-            stream.end(|prev, next| self.pair(engine, cues, scratch, out_info, prev, next))?;
+        let owed = stream.end(|prev, next| self.pair(pairs, out_info, prev, next))?;
         self.queue(state, owed.into_iter().collect())
     }
 
@@ -692,13 +683,16 @@ impl ReynoldsFlow {
     /// buffer, and its cues.
     fn pair(
         &self,
-        engine: &mut Option<(u64, PairEngine)>,
-        cues: &mut Option<(u64, Cues)>,
-        scratch: &mut Vec<u8>,
+        pairs: &mut Pairs,
         out_info: &gst_video::VideoInfo,
         prev: &Gray,
         next: &Gray,
     ) -> Result<PairOutput, gst::FlowError> {
+        let Pairs {
+            engine,
+            cues,
+            scratch,
+        } = pairs;
         let Some((_, engine)) = engine.as_mut() else {
             return Err(gst::FlowError::NotNegotiated);
         };
