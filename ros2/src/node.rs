@@ -176,7 +176,7 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
         "{} -> {} (rgb8{cues_topic}), variant {}, {} thread(s), {}, {} QoS",
         topics.input,
         topics.output,
-        args.variant.name(),
+        settings.variant.name(),
         engine.threads(),
         discovery.describe(),
         if args.reliable {
