@@ -10,7 +10,7 @@ use gst::glib;
 pub mod cues;
 mod reynoldsflow;
 
-pub use reynoldsflow::{FirstFrame, ReynoldsFlow, ScaleMode, VariantMode};
+pub use reynoldsflow::{FirstFrameMode, ReynoldsFlow, ScaleMode, VariantMode, property};
 
 fn plugin_init(plugin: &gst::Plugin) -> Result<(), glib::BoolError> {
     reynoldsflow::register(plugin)

@@ -1,8 +1,8 @@
 //! The `reynoldsflow` element in-process (gst_check's harness), against
-//! `reynoldsflow run` run in-process on the same frames (its PNG outputs)
-//! and against the core's `MotionCues` run on its own.
+//! the host library's computation of each pair on the same frames (what
+//! `reynoldsflow run` writes: `Compute::pair` and `OutputSpec::image`) and
+//! against the core's `MotionCues` run on its own.
 
-use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use gst::prelude::*;
@@ -10,9 +10,16 @@ use gst_check::Harness;
 use gst_video::prelude::*;
 use gst_video::{VideoFormat, VideoInfo, VideoRegionOfInterestMeta};
 use gstreynoldsflow::cues::{self, CELL, REGION_STRUCTURE, REGIONS, ROI_TYPE};
+use gstreynoldsflow::{FirstFrameMode, ScaleMode, VariantMode};
 use reynoldsflow_core::{Config, FramePair, Params, Plan};
 use reynoldsflow_cues::{MotionCues, Region, grid_cells};
-use reynoldsflow_host::{fixed_engine, image_io};
+use reynoldsflow_host::Gray;
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::fixed_engine;
+use reynoldsflow_host::outputs::{OutputSpec, Variant};
+use reynoldsflow_host::settings::{
+    self as values, Choice, FirstFrame, ScaleArg, Settings, parse_intensity_scale,
+};
 
 /// GStreamer with a registry of its own (never the user's) and the plugin.
 fn init() {
@@ -162,88 +169,80 @@ fn run_element(
     push_all(&mut rig, format, (w, h), frames, 0)
 }
 
-/// `reynoldsflow run CLIP --raw WxH --out DIR FLAGS`, in-process: the RGB
-/// of each PNG it writes, in frame order.
-fn cli_outputs(frames: &[Vec<u8>], (w, h): (usize, usize), flags: &[&str]) -> Vec<Vec<u8>> {
-    let dir = tempfile::tempdir().unwrap();
-    let clip = dir.path().join("clip.gray");
-    std::fs::write(&clip, frames.concat()).unwrap();
-    let out = dir.path().join("out");
-    let size = format!("{w}x{h}");
-    let mut args: Vec<&str> = vec!["reynoldsflow", "run"];
-    args.extend([
-        clip.to_str().unwrap(),
-        "--raw",
-        &size,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    args.extend(flags);
-    let code = reynoldsflow_cli::run(&args);
-    assert_eq!(
-        format!("{code:?}"),
-        format!("{:?}", std::process::ExitCode::SUCCESS),
-        "reynoldsflow {args:?}"
-    );
-    let mut pngs: Vec<PathBuf> = std::fs::read_dir(&out)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "png"))
-        .collect();
-    pngs.sort();
-    pngs.iter().map(|p| read_rgb(p, w, h)).collect()
-}
-
-fn read_rgb(path: &Path, w: usize, h: usize) -> Vec<u8> {
-    let image = image_io::read_rgb8(path).unwrap();
-    assert_eq!((image.width, image.height), (w, h));
-    image.bytes
+/// What `reynoldsflow run` writes for each consecutive pair of `frames`
+/// with `settings`: the host's computation of one pair (`Compute::pair`,
+/// as `reynoldsflow pair`) and the variant's image.
+fn expected_outputs(
+    frames: &[Vec<u8>],
+    (w, h): (usize, usize),
+    settings: &Settings,
+) -> Vec<Vec<u8>> {
+    let compute = settings.compute().unwrap();
+    let spec = OutputSpec {
+        variant: settings.variant,
+        ..OutputSpec::default()
+    };
+    let gray = |luma: &Vec<u8>| Gray::new(w, h, luma.clone()).unwrap();
+    frames
+        .windows(2)
+        .map(|pair| spec.image(&compute.pair(&gray(&pair[0]), &gray(&pair[1])).unwrap()))
+        .collect()
 }
 
 /// Element properties (name, value).
 type Properties = &'static [(&'static str, &'static str)];
 
-/// Element properties and the `reynoldsflow run` flags that mean the same.
-const SETTINGS: [(Properties, &[&str]); 4] = [
-    (&[], &[]),
-    (
-        &[
-            ("scale", "fixed"),
-            ("k-d", "6"),
-            ("k-c", "20.5"),
-            ("variant", "cd"),
-            ("threads", "3"),
-        ],
-        &["--scale", "fixed:6,20.5", "--variant", "cd"],
-    ),
-    (
-        &[
-            ("lambda", "0.0003"),
-            ("intensity-scale", "2/255"),
-            ("variant", "dc0"),
-        ],
-        &[
-            "--lambda",
-            "0.0003",
-            "--intensity-scale",
-            "2/255",
-            "--variant",
-            "dc0",
-        ],
-    ),
-    (
-        &[("variant", "hsv"), ("threads", "1")],
-        &["--variant", "hsv"],
-    ),
-];
+/// Element properties and the host settings that mean the same.
+fn settings_cases() -> [(Properties, Settings); 4] {
+    [
+        (&[], Settings::default()),
+        (
+            &[
+                ("scale", "fixed"),
+                ("k-d", "6"),
+                ("k-c", "20.5"),
+                ("variant", "cd"),
+                ("threads", "3"),
+            ],
+            Settings {
+                scale: ScaleArg::Fixed {
+                    k_d: 6.0,
+                    k_c: 20.5,
+                },
+                variant: Variant::Cd,
+                ..Settings::default()
+            },
+        ),
+        (
+            &[
+                ("lambda", "0.0003"),
+                ("intensity-scale", "2/255"),
+                ("variant", "dc0"),
+            ],
+            Settings {
+                lambda: 0.0003,
+                intensity_scale: parse_intensity_scale("2/255").unwrap(),
+                variant: Variant::Dc0,
+                ..Settings::default()
+            },
+        ),
+        (
+            &[("variant", "hsv"), ("threads", "2")],
+            Settings {
+                variant: Variant::Hsv,
+                ..Settings::default()
+            },
+        ),
+    ]
+}
 
 #[test]
 fn gray8_frames_give_the_bytes_of_reynoldsflow_run() {
     for (w, h) in [(64, 48), (61, 37)] {
         let clip = frames(6, w, h);
-        for (properties, flags) in SETTINGS {
+        for (properties, settings) in settings_cases() {
             let outs = run_element(properties, VideoFormat::Gray8, (w, h), &clip);
-            let expected = cli_outputs(&clip, (w, h), flags);
+            let expected = expected_outputs(&clip, (w, h), &settings);
             assert_eq!(outs.len(), 5, "N frames give N - 1 outputs");
             assert_eq!(expected.len(), 5);
             for (k, (out, cli)) in outs.iter().zip(&expected).enumerate() {
@@ -254,7 +253,7 @@ fn gray8_frames_give_the_bytes_of_reynoldsflow_run() {
                 );
                 assert!(
                     out.rgb == *cli,
-                    "{w}x{h} {properties:?}: output {k} differs from the CLI"
+                    "{w}x{h} {properties:?}: output {k} differs from run's"
                 );
             }
         }
@@ -323,9 +322,9 @@ fn a_caps_change_and_a_flush_reset_the_pair() {
     let first = push_all(&mut rig, VideoFormat::Gray8, (w, h), &a, 0);
     rig.set_src_caps(caps(VideoFormat::Gray8, w2, h2));
     let second = push_all(&mut rig, VideoFormat::Gray8, (w2, h2), &b, 3);
-    // Each size on its own: 2 outputs, the CLI's bytes; no pair across the change.
-    let expected_a = cli_outputs(&a, (w, h), &[]);
-    let expected_b = cli_outputs(&b, (w2, h2), &[]);
+    // Each size on its own: 2 outputs, run's bytes; no pair across the change.
+    let expected_a = expected_outputs(&a, (w, h), &Settings::default());
+    let expected_b = expected_outputs(&b, (w2, h2), &Settings::default());
     assert_eq!(
         first.iter().map(|o| &o.rgb).collect::<Vec<_>>(),
         expected_a.iter().collect::<Vec<_>>()
@@ -345,7 +344,7 @@ fn a_caps_change_and_a_flush_reset_the_pair() {
     assert!(rig.push_event(gst::event::Segment::new(&segment)));
     let after = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[3..], 3);
     assert_eq!((before.len(), after.len()), (2, 2));
-    let expected = cli_outputs(&clip[3..], (w, h), &[]);
+    let expected = expected_outputs(&clip[3..], (w, h), &Settings::default());
     assert!(after.iter().map(|o| &o.rgb).eq(expected.iter()));
     assert_eq!(after[0].pts, Some(pts(3)));
 }
@@ -363,7 +362,7 @@ fn a_stop_resets_the_pair() {
     rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
     let after = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[2..], 2);
     assert_eq!((before.len(), after.len()), (1, 2));
-    let expected = cli_outputs(&clip[2..], (w, h), &[]);
+    let expected = expected_outputs(&clip[2..], (w, h), &Settings::default());
     assert!(after.iter().map(|o| &o.rgb).eq(expected.iter()));
 }
 
@@ -379,10 +378,15 @@ fn core_regions(
     const H: usize = 48;
     assert_eq!((w, h), (W, H));
     let config = Config::new(W, H, Params::DEFAULT).unwrap();
+    let settings = Settings {
+        cue_threshold: threshold,
+        cue_min_area: min_area,
+        ..Settings::default()
+    };
     let mut sink = Box::new(
         MotionCues::<CELL, { grid_cells(W, CELL) }, { grid_cells(H, CELL) }, REGIONS>::new(
             &config,
-            cues::params(threshold, min_area).unwrap(),
+            reynoldsflow_host::cues::params(&settings).unwrap(),
         )
         .unwrap(),
     );
@@ -517,16 +521,204 @@ fn unsupported_caps_and_settings_are_refused_with_a_message() {
 #[test]
 fn a_nan_cue_threshold_is_refused_and_the_cues_cannot_see_one() {
     // GLib (2.74 and later) refuses NaN for a double property and keeps the
-    // value it had; `cues::params` refuses it too, for the GLibs that clamp
-    // instead (every comparison with NaN is false, so it passes a clamp).
+    // value it had; the host's cue settings refuse it too, for the GLibs
+    // that clamp instead (every comparison with NaN is false, so it passes
+    // a clamp), and the element names its property.
     let rig = harness(&[("cue-threshold", "0.5")]);
     let element = rig.element().unwrap();
     let set = std::panic::catch_unwind(|| element.set_property("cue-threshold", f64::NAN));
     assert!(set.is_err(), "glib-rs sets a NaN it should refuse");
     assert_eq!(element.property::<f64>("cue-threshold"), 0.5);
-    let refused = cues::params(f64::NAN, 1).unwrap_err();
-    assert!(refused.contains("cue-threshold is NaN"), "{refused}");
-    assert!(cues::params(f64::INFINITY, 1).is_ok());
+    let nan = Settings {
+        cue_threshold: f64::NAN,
+        ..Settings::default()
+    };
+    let refused = reynoldsflow_host::cues::params(&nan).unwrap_err();
+    let HostError::Setting { setting, .. } = refused else {
+        panic!("{refused}")
+    };
+    assert_eq!(gstreynoldsflow::property(setting), "cue-threshold");
+}
+
+/// A fresh element's properties are the host's defaults, and its enum
+/// properties list the host's names.
+#[test]
+fn property_defaults_are_the_hosts_settings() {
+    init();
+    let element = gst::ElementFactory::make("reynoldsflow").build().unwrap();
+    let d = Settings::default();
+    let first_frame: FirstFrameMode = element.property("first-frame");
+    assert_eq!(FirstFrame::from(first_frame), d.first_frame);
+    let scale: ScaleMode = element.property("scale");
+    let gains = (
+        element.property::<f64>("k-d"),
+        element.property::<f64>("k-c"),
+    );
+    assert_eq!(gains, values::DEFAULT_FIXED_GAINS);
+    assert_eq!(scale.host(gains), d.scale);
+    assert_eq!(element.property::<f64>("lambda"), d.lambda);
+    let intensity: String = element.property("intensity-scale");
+    assert_eq!(parse_intensity_scale(&intensity), Ok(d.intensity_scale));
+    let variant: VariantMode = element.property("variant");
+    assert_eq!(Variant::from(variant), d.variant);
+    let threads = element.property::<u32>("threads");
+    assert_eq!(
+        Some(threads).filter(|&n| n > 0).map(|n| n as usize),
+        d.threads
+    );
+    assert_eq!(element.property::<f64>("cue-threshold"), d.cue_threshold);
+    assert_eq!(element.property::<u32>("cue-min-area"), d.cue_min_area);
+    assert!(!element.property::<bool>("cues"));
+
+    // Every enum property's nicks are the host's names, in its order.
+    fn nicks<T: gst::glib::prelude::StaticType>() -> Vec<String> {
+        let class = gst::glib::EnumClass::with_type(T::static_type()).unwrap();
+        class.values().iter().map(|v| v.nick().to_owned()).collect()
+    }
+    fn names<T: Choice>() -> Vec<String> {
+        T::ALL.iter().map(|v| v.name().to_owned()).collect()
+    }
+    let mut first_frames = names::<FirstFrame>();
+    first_frames.sort();
+    let mut listed = nicks::<FirstFrameMode>();
+    listed.sort();
+    assert_eq!(listed, first_frames);
+    let mut variants = names::<Variant>();
+    variants.sort();
+    let mut listed = nicks::<VariantMode>();
+    listed.sort();
+    assert_eq!(listed, variants);
+    for name in names::<FirstFrame>() {
+        let f = FirstFrame::from_name(&name).unwrap();
+        element.set_property_from_str("first-frame", &name);
+        let set: FirstFrameMode = element.property("first-frame");
+        assert_eq!(FirstFrame::from(set), f);
+    }
+}
+
+/// `first-frame=repeat` gives one output per frame: one frame, then EOS,
+/// gives its own pair (no motion); a caps segment of one frame too.
+#[test]
+fn repeat_gives_every_frame_an_output_at_eos_and_at_new_caps() {
+    let (w, h) = (64, 48);
+    let clip = frames(6, w, h);
+    let lone = |luma: &Vec<u8>| {
+        expected_outputs(&[luma.clone(), luma.clone()], (w, h), &Settings::default())
+    };
+
+    let mut rig = harness(&[("first-frame", "repeat")]);
+    rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+    let before = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[..1], 0);
+    assert!(before.is_empty(), "the lone frame waits for its pair");
+    assert!(rig.push_event(gst::event::Eos::new()));
+    let out = rig.pull().unwrap();
+    assert_eq!(out.pts(), Some(pts(0)));
+    assert!(packed_rgb(&out, w, h) == lone(&clip[0])[0]);
+    assert!(rig.try_pull().is_none());
+
+    // Frames 0-2 in one caps, frame 3 alone in another, frames 4-5 in a third:
+    // 6 frames, 6 outputs, each stamped with its frame.
+    let mut rig = harness(&[("first-frame", "repeat")]);
+    let mut outs = Vec::new();
+    let segments: [(&[Vec<u8>], usize, u32); 3] = [
+        (&clip[..3], 0, 25),
+        (&clip[3..4], 3, 30),
+        (&clip[4..], 4, 25),
+    ];
+    for (frames, first, fps) in segments {
+        let caps = gst_video::VideoCapsBuilder::new()
+            .format(VideoFormat::Gray8)
+            .width(w as i32)
+            .height(h as i32)
+            .framerate(gst::Fraction::new(fps as i32, 1))
+            .build();
+        rig.set_src_caps(caps);
+        outs.extend(push_all(
+            &mut rig,
+            VideoFormat::Gray8,
+            (w, h),
+            frames,
+            first,
+        ));
+    }
+    assert!(rig.push_event(gst::event::Eos::new()));
+    while let Some(b) = rig.try_pull() {
+        outs.push(Out {
+            pts: b.pts(),
+            rgb: packed_rgb(&b, w, h),
+        });
+    }
+    let stamps: Vec<_> = outs.iter().map(|o| o.pts).collect();
+    assert_eq!(stamps, (0..6).map(|k| Some(pts(k))).collect::<Vec<_>>());
+    assert!(outs[3].rgb == lone(&clip[3])[0], "frame 3's own pair");
+    let tail = expected_outputs(&clip[4..], (w, h), &Settings::default());
+    assert!(outs[4].rgb == tail[0] && outs[5].rgb == tail[0]);
+}
+
+/// A gap (a GAP event, or a buffer flagged GAP, empty or not) breaks the
+/// pair chain: no pair spans it, the gap goes on downstream, and the
+/// stream goes on.
+#[test]
+fn a_gap_breaks_the_pair_chain() {
+    let (w, h) = (64, 48);
+    let clip = frames(6, w, h);
+    let expected = |frames: &[Vec<u8>]| expected_outputs(frames, (w, h), &Settings::default());
+    for how in ["event", "empty buffer", "full buffer"] {
+        let mut rig = harness(&[]);
+        rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+        let before = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[..3], 0);
+        match how {
+            "event" => {
+                assert!(rig.push_event(gst::event::Gap::builder(pts(3)).duration(pts(1)).build()))
+            }
+            _ => {
+                let mut gap = match how {
+                    "empty buffer" => gst::Buffer::new(),
+                    _ => buffer(VideoFormat::Gray8, w, h, &clip[2], 3),
+                };
+                let b = gap.get_mut().unwrap();
+                b.set_pts(pts(3));
+                b.set_duration(pts(1));
+                b.set_flags(gst::BufferFlags::GAP);
+                assert_eq!(rig.push(gap), Ok(gst::FlowSuccess::Ok), "{how}");
+            }
+        }
+        let after = push_all(&mut rig, VideoFormat::Gray8, (w, h), &clip[3..], 3);
+        assert_eq!((before.len(), after.len()), (2, 2), "{how}");
+        assert!(
+            after.iter().map(|o| &o.rgb).eq(expected(&clip[3..]).iter()),
+            "{how}"
+        );
+        assert_eq!(after[0].pts, Some(pts(3)), "{how}");
+        let gap =
+            std::iter::from_fn(|| rig.try_pull_event()).find(|e| e.type_() == gst::EventType::Gap);
+        assert!(gap.is_some(), "{how}: the gap goes on downstream");
+    }
+}
+
+/// At odd widths each RGB row has padding: every byte of it is written (zero).
+#[test]
+fn row_padding_is_written() {
+    let (w, h) = (61, 37);
+    let clip = frames(3, w, h);
+    for first_frame in ["drop", "black"] {
+        let mut rig = harness(&[("first-frame", first_frame)]);
+        rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+        let mut outs = 0;
+        for (k, luma) in clip.iter().enumerate() {
+            rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)).unwrap();
+            while let Some(b) = rig.try_pull() {
+                let map = b.map_readable().unwrap();
+                let stride = 3 * w + 1; // 183 bytes of pixels, 4-byte rows
+                assert_eq!(map.len(), stride * h);
+                for row in map.chunks(stride) {
+                    assert_eq!(row[3 * w..], [0], "{first_frame}");
+                }
+                outs += 1;
+            }
+        }
+        assert_eq!(outs, if first_frame == "drop" { 2 } else { 3 });
+    }
 }
 
 fn harness_with_bus(properties: &[(&str, &str)]) -> (Harness, gst::Bus) {

@@ -15,10 +15,12 @@
 //!   whatever the CPU, where `serial` takes the widest instructions the CPU
 //!   has (`reynoldsflow_host::dispatch`);
 //! - `serial-minmax`: `serial` with per-frame min–max (two engine passes);
-//! - `parallel`: the host's one-pair parallel path (`PairPool`, what the
-//!   GStreamer element runs), `Fixed` gains, on `--threads` threads: tiles
-//!   balanced over the threads, every pixel kept, then the bytes. (`run` parallelises across pairs instead; its
-//!   scaling is timed on the command itself, `scripts/bench-vs-opencv`.)
+//! - `parallel`: the host's one-pair engine (`PairEngine`, what the
+//!   GStreamer element and the ROS 2 node run), `Fixed` gains, on
+//!   `--threads` threads: tiles balanced over the threads, their
+//!   magnitudes kept, then their bytes. (`run` parallelises across pairs
+//!   instead; its scaling is timed on the command itself,
+//!   `scripts/bench-vs-opencv`.)
 //!
 //! Without `--prev` (e.g. under `cargo bench`), it times the built-in
 //! textured pair at 640×480 in every mode.
@@ -26,11 +28,11 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use reynoldsflow_core::{Frame, IntensityScale, Scaling};
+use reynoldsflow_core::Scaling;
+use reynoldsflow_host::Gray;
 use reynoldsflow_host::dispatch::Isa;
-use reynoldsflow_host::outputs::Variant;
-use reynoldsflow_host::pair_pool::PairPool;
-use reynoldsflow_host::settings::ScaleArg;
+use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::settings::{ScaleArg, Settings};
 
 mod common;
 use common::{COLS, FIXED, core_engine, moving_pair, read_gray};
@@ -96,15 +98,19 @@ fn computation(
             Box::new(core_engine::<COLS>(isa, prev, next, (w, h), None, scaling))
         }
         "parallel" => {
-            let (prev, next) = (prev.to_vec(), next.to_vec());
-            // `FIXED`'s gains, as `--scale fixed:8,8`.
-            let scale = ScaleArg::Fixed { k_d: 8.0, k_c: 8.0 };
-            let mut pool = PairPool::new(scale, IntensityScale::PER_255, 1e-4, threads).unwrap();
+            let prev = Gray::new(w, h, prev.to_vec()).unwrap();
+            let next = Gray::new(w, h, next.to_vec()).unwrap();
+            let settings = Settings {
+                // `FIXED`'s gains, as `--scale fixed:8,8`.
+                scale: ScaleArg::Fixed { k_d: 8.0, k_c: 8.0 },
+                threads: Some(threads),
+                ..Settings::default()
+            };
+            let mut engine = PairEngine::new(&settings).unwrap();
+            let mut rgb = vec![0; 3 * w * h];
             Box::new(move || {
-                let prev = Frame::packed(&prev, w, h).unwrap();
-                let next = Frame::packed(&next, w, h).unwrap();
-                let out = pool.compute(prev, next).unwrap();
-                black_box(out.image(Variant::Dc));
+                engine.image(&prev, &next, &mut rgb).unwrap();
+                black_box(&rgb);
             })
         }
         other => {

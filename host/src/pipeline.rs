@@ -105,6 +105,16 @@ impl Compute {
         self.engine
     }
 
+    /// The fixed engine's parameters and scaling (none for the float engine).
+    pub(crate) fn fixed(&self) -> Option<(Params, Scaling)> {
+        self.fixed
+    }
+
+    /// The tile size, when set.
+    pub(crate) fn tile(&self) -> Option<TileSize> {
+        self.tile
+    }
+
     /// One pair, exactly as `reynoldsflow pair` computes it.
     pub fn pair(&self, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
         self.pair_with(&mut FrameEngine::new(), prev, next)
@@ -188,7 +198,7 @@ impl Compute {
 }
 
 /// A tile the core refuses is the fault of the tile setting.
-fn tile_error(e: HostError) -> HostError {
+pub(crate) fn tile_error(e: HostError) -> HostError {
     match e {
         HostError::Core(c @ CoreError::TileOutOfFrame) => {
             HostError::setting(Setting::Tile, c.to_string())

@@ -142,9 +142,9 @@ pub const DEFAULT_LAMBDA: f64 = 1e-4;
 pub const DEFAULT_VARIANT: Variant = Variant::Dc;
 /// The SPEC's sequence rule: N frames, N − 1 results.
 pub const DEFAULT_FIRST_FRAME: FirstFrame = FirstFrame::Drop;
-/// Cues: the least `|v_R|` (px per frame) a cue cell must reach.
+/// Cues: the least `|v_c|` (px per frame) a moving pixel has.
 pub const DEFAULT_CUE_THRESHOLD: f64 = 1.0;
-/// Cues: the fewest cells a region must hold to be reported.
+/// Cues: the fewest moving pixels a region must hold to be reported.
 pub const DEFAULT_CUE_MIN_AREA: u32 = 4;
 
 /// A setting, as an error names it; each front end prints it under its own
@@ -194,6 +194,10 @@ pub enum Setting {
     Raw,
     /// Dataset shard.
     Shard,
+    /// Cues: the least `|v_c|` a moving pixel has.
+    CueThreshold,
+    /// Cues: the fewest moving pixels a region holds.
+    CueMinArea,
 }
 
 impl Setting {
@@ -222,6 +226,8 @@ impl Setting {
             Setting::Fps => "fps",
             Setting::Raw => "raw",
             Setting::Shard => "shard",
+            Setting::CueThreshold => "cue_threshold",
+            Setting::CueMinArea => "cue_min_area",
         }
     }
 }
@@ -253,6 +259,10 @@ pub struct Settings {
     pub threads: Option<usize>,
     /// What a stream's first frame gives.
     pub first_frame: FirstFrame,
+    /// Cues: a pixel moves when `|v_c|` is above this, px.
+    pub cue_threshold: f64,
+    /// Cues: regions of fewer moving pixels are dropped.
+    pub cue_min_area: u32,
 }
 
 impl Default for Settings {
@@ -267,6 +277,8 @@ impl Default for Settings {
             hsv_max: None,
             threads: None,
             first_frame: DEFAULT_FIRST_FRAME,
+            cue_threshold: DEFAULT_CUE_THRESHOLD,
+            cue_min_area: DEFAULT_CUE_MIN_AREA,
         }
     }
 }

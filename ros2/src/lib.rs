@@ -5,6 +5,10 @@
 //!
 //! Built on ros2-client (RustDDS): pure Rust, so it needs no ROS install
 //! to build and runs beside ROS 2 nodes of any DDS vendor on the graph.
+//! Which frame pairs with which and which header each output carries is
+//! the host's pair stream (`reynoldsflow_host::pair_stream`), each pair's
+//! image its pair engine (`reynoldsflow_host::pair_engine`) and the cues
+//! its `cues`, as in the GStreamer element.
 //!
 //! | module | what |
 //! |---|---|
@@ -12,8 +16,6 @@
 //! | [`discovery`] | `ROS_DOMAIN_ID` and the discovery range |
 //! | [`msg`] | the messages on the wire |
 //! | [`luma`] | an image message to the engine's gray frame |
-//! | [`pairing`] | frames to pairs, outputs to headers, restarts |
-//! | [`compute`] | a pair to its image, through the host crate |
 //! | [`cues`] | motion cues as detections |
 //! | [`log`] | stderr and `/rosout` |
 //! | [`shutdown`] | SIGINT and SIGTERM |
@@ -22,12 +24,10 @@
 #![deny(missing_docs)]
 
 pub mod args;
-pub mod compute;
 pub mod cues;
 pub mod discovery;
 pub mod log;
 pub mod luma;
 pub mod msg;
 pub mod node;
-pub mod pairing;
 pub mod shutdown;

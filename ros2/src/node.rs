@@ -1,6 +1,6 @@
 //! The ROS 2 side: a node with one subscription and one or two
 //! publishers, and the loop that turns each received image into the
-//! outputs [`Pairing`] says, computed by [`PairComputer`].
+//! outputs the host's [`PairStream`] says, computed by its [`PairEngine`].
 //!
 //! One thread takes the messages in order and computes each pair (on
 //! `--threads` threads); RustDDS receives and reassembles fragments on its
@@ -10,20 +10,21 @@
 use std::time::{Duration, Instant};
 
 use reynoldsflow_cues::{CueError, Region};
-use reynoldsflow_host::HostError;
+use reynoldsflow_host::cues::Cues;
+use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::pair_stream::{Frame, Output, PairStream};
+use reynoldsflow_host::{Gray, HostError};
 use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token};
 use ros2_client::dds::{Context, Node, Publisher, Subscription};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{NodeName, NodeOptions, QosProfile};
 
-use crate::args::{Args, Topics};
-use crate::compute::PairComputer;
-use crate::cues::{self, Cues};
+use crate::args::{self, Args, Topics};
+use crate::cues;
 use crate::discovery::Discovery;
 use crate::log::Log;
 use crate::luma;
-use crate::msg::{Detection2DArray, Header, Image};
-use crate::pairing::{Frame, Pairing, Step};
+use crate::msg::{Detection2DArray, Header, Image, Time};
 use crate::shutdown::Stop;
 
 /// Why the node could not start. Each says what to change.
@@ -32,8 +33,8 @@ pub enum NodeError {
     /// A flag's value.
     #[error("{0}")]
     Usage(String),
-    /// A computation flag, in the CLI's words.
-    #[error("{0}")]
+    /// A computation flag, named by its flag.
+    #[error("{}", settings_message(.0))]
     Settings(#[from] HostError),
     /// A ROS environment variable.
     #[error("{0}")]
@@ -49,6 +50,14 @@ pub enum NodeError {
     /// The signal handler.
     #[error("could not install the SIGINT/SIGTERM handler: {0}")]
     Signal(#[from] ctrlc::Error),
+}
+
+/// A host error, a setting named by its flag.
+fn settings_message(e: &HostError) -> String {
+    match e {
+        HostError::Setting { setting, problem } => format!("{}: {problem}", args::flag(*setting)),
+        e => e.to_string(),
+    }
 }
 
 fn dds<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> NodeError {
@@ -150,9 +159,10 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
     let topics = args.topics().map_err(NodeError::Usage)?;
     let discovery =
         Discovery::from_env(|k| std::env::var(k).ok()).map_err(NodeError::Environment)?;
-    let computer = PairComputer::new(&args.settings(), args.cues.is_some())?;
+    let settings = args.settings();
+    let engine = PairEngine::new(&settings)?.keep_magnitudes(args.cues.is_some());
     let cues = match args.cues {
-        Some(_) => Some(Cues::new(args.cue_settings()).map_err(NodeError::Usage)?),
+        Some(_) => Some(Cues::new(&settings)?),
         None => None,
     };
     let stop = Stop::install()?;
@@ -166,8 +176,8 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
         "{} -> {} (rgb8{cues_topic}), variant {}, {} thread(s), {}, {} QoS",
         topics.input,
         topics.output,
-        args.variant.name(),
-        args.settings().threads(),
+        settings.variant.name(),
+        engine.threads(),
         discovery.describe(),
         if args.reliable {
             "reliable"
@@ -182,8 +192,8 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
         .map_err(dds("the poller"))?;
     let mut events = Events::with_capacity(8);
     let mut stream = Stream {
-        pairing: Pairing::new(args.first_frame),
-        computer,
+        pairs: PairStream::new(settings.first_frame),
+        engine,
         cues,
         log,
         summary: Summary::default(),
@@ -214,22 +224,59 @@ pub fn run(args: &Args) -> Result<Summary, NodeError> {
             }
         }
     }
+    stream.end(&endpoints);
     stream.stopped();
     Ok(stream.summary)
 }
 
 /// The input stream's state.
 struct Stream {
-    pairing: Pairing,
-    computer: PairComputer,
+    pairs: PairStream<Header>,
+    engine: PairEngine,
     cues: Option<Cues>,
     log: Log,
     summary: Summary,
     input: String,
 }
 
-/// What a pair gives besides its image: the cues' regions, when asked.
-type PairCues = Option<Result<Vec<Region>, CueError>>;
+/// A pair's image and, when asked, its cues' regions.
+struct PairImage {
+    width: usize,
+    height: usize,
+    rgb: Vec<u8>,
+    regions: Option<Result<Vec<Region>, CueError>>,
+}
+
+/// The pair `(prev, next)` through the engine, and its cues when asked;
+/// its time counted in `summary`.
+fn pair(
+    engine: &mut PairEngine,
+    cues: &mut Option<Cues>,
+    summary: &mut Summary,
+    prev: &Gray,
+    next: &Gray,
+) -> Result<PairImage, HostError> {
+    let started = Instant::now();
+    let rgb = engine.image_vec(prev, next)?;
+    let regions = match (cues.as_mut(), engine.magnitudes()) {
+        (Some(cues), Some(pair)) => Some(cues.regions(&pair).map(<[Region]>::to_vec)),
+        _ => None,
+    };
+    summary.compute_seconds += started.elapsed().as_secs_f64();
+    summary.pairs += 1;
+    let (width, height) = prev.size();
+    Ok(PairImage {
+        width,
+        height,
+        rgb,
+        regions,
+    })
+}
+
+/// A stamp in nanoseconds.
+fn nanoseconds(t: &Time) -> i128 {
+    i128::from(t.sec) * 1_000_000_000 + i128::from(t.nanosec)
+}
 
 impl Stream {
     /// One received image: refused, a first frame, or a pair.
@@ -246,56 +293,74 @@ impl Stream {
                 return;
             }
         };
-        let (width, height) = (gray.width, gray.height);
         let header = image.header;
         drop(image.data);
-        let (computer, cues, summary) = (&mut self.computer, &mut self.cues, &mut self.summary);
-        let step = self.pairing.push(
-            Frame {
-                gray,
-                encoding,
-                header,
-            },
-            |prev, next| {
-                let started = Instant::now();
-                let (rgb, regions) = computer.pair(prev, next, |pixels| {
-                    cues.as_mut().map(|c| c.regions(width, height, pixels))
-                })?;
-                summary.compute_seconds += started.elapsed().as_secs_f64();
-                summary.pairs += 1;
-                Ok::<_, HostError>((rgb, regions.flatten()))
-            },
-        );
+        let frame = Frame {
+            gray,
+            encoding: encoding.name(),
+            stamp: Some(nanoseconds(&header.stamp)),
+            label: header,
+        };
+        let (engine, cues, summary) = (&mut self.engine, &mut self.cues, &mut self.summary);
+        let step = self
+            .pairs
+            .push(frame, |prev, next| pair(engine, cues, summary, prev, next));
         match step {
-            Ok(step) => self.publish(step, width, height, out),
+            Ok(step) => {
+                if let Some(restart) = &step.restart {
+                    self.log
+                        .info(&format!("{} restarts its pairs: {restart}", self.input));
+                }
+                self.publish(step.outputs, out);
+            }
             Err(e) => self.log.repeated(
                 "pair",
                 &format!(
-                    "could not compute a pair on {}: {e}; the next frame starts anew",
-                    self.input
+                    "could not compute a pair on {}: {}; the next frame starts anew",
+                    self.input,
+                    settings_message(&e)
                 ),
             ),
         }
     }
 
-    fn publish(
-        &mut self,
-        step: Step<(Vec<u8>, PairCues)>,
-        width: usize,
-        height: usize,
-        out: &Endpoints,
-    ) {
-        if let Some(restart) = &step.restart {
-            self.log
-                .info(&format!("{} restarts its pairs: {restart}", self.input));
+    /// The input stops: the output its last frame still owes (`first-frame repeat`).
+    fn end(&mut self, out: &Endpoints) {
+        let (engine, cues, summary) = (&mut self.engine, &mut self.cues, &mut self.summary);
+        match self
+            .pairs
+            .end(|prev, next| pair(engine, cues, summary, prev, next))
+        {
+            Ok(owed) => self.publish(owed.into_iter().collect(), out),
+            Err(e) => self
+                .log
+                .repeated("pair", &format!("could not compute a pair: {e}")),
         }
-        if let Some((w, h, header)) = step.black {
-            self.send(out, header.clone(), w, h, vec![0; 3 * w * h]);
-            self.send_cues(out, &header, &[]);
+    }
+
+    fn publish(&mut self, outputs: Vec<Output<PairImage, Header>>, out: &Endpoints) {
+        for output in outputs {
+            match output {
+                Output::Black {
+                    width,
+                    height,
+                    label,
+                } => {
+                    self.send_cues(out, &label, &[]);
+                    self.send(out, label, width, height, vec![0; 3 * width * height]);
+                }
+                Output::Result { result, labels } => self.publish_result(result, labels, out),
+            }
         }
-        let Some(((rgb, regions), headers)) = step.result else {
-            return;
-        };
+    }
+
+    fn publish_result(&mut self, image: PairImage, labels: Vec<Header>, out: &Endpoints) {
+        let PairImage {
+            width,
+            height,
+            rgb,
+            regions,
+        } = image;
         let regions = match regions {
             Some(Ok(regions)) => Some(regions),
             Some(Err(e)) => {
@@ -310,9 +375,9 @@ impl Stream {
             }
             None => None,
         };
-        let last = headers.len().saturating_sub(1);
+        let last = labels.len().saturating_sub(1);
         let mut rgb = Some(rgb);
-        for (i, header) in headers.into_iter().enumerate() {
+        for (i, header) in labels.into_iter().enumerate() {
             // The copy of `first-frame repeat` clones; the last send moves.
             let data = if i == last { rgb.take() } else { rgb.clone() }.unwrap_or_default();
             if let Some(regions) = &regions {

@@ -11,11 +11,11 @@
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use reynoldsflow_core::{Frame, IntensityScale};
-use reynoldsflow_host::outputs::Variant;
-use reynoldsflow_host::pair_pool::PairPool;
-use reynoldsflow_host::settings::ScaleArg;
-use reynoldsflow_ros2::cues::{self, CueSettings, Cues};
+use reynoldsflow_host::Gray;
+use reynoldsflow_host::cues::Cues;
+use reynoldsflow_host::outputs::OutputSpec;
+use reynoldsflow_host::settings::Settings;
+use reynoldsflow_ros2::cues;
 use reynoldsflow_ros2::discovery::Discovery;
 use reynoldsflow_ros2::msg::{Detection2DArray, Header, Image, Time};
 use ros2_client::dds::{Context, Node, Publisher, Subscription};
@@ -217,30 +217,45 @@ fn cues_end_to_end() {
     assert_eq!(images.len(), FRAMES - 1);
     assert_eq!(detections.len(), FRAMES - 1);
 
-    // The same pairs through the host and the cues crate, here.
-    let mut pool = PairPool::new(ScaleArg::MinMax, IntensityScale::PER_255, 1e-4, 1).unwrap();
-    let mut cue_finder = Cues::new(CueSettings {
-        threshold: 1.0,
-        min_area: 4,
-    })
-    .unwrap();
+    // The same pairs through the host's computation of a pair (`run`'s
+    // bytes) and the cues crate on the core's magnitudes, here.
+    let settings = Settings::default();
+    let compute = settings.compute().unwrap();
+    let mut cue_finder = Cues::new(&settings).unwrap();
     let mut moving = 0;
     for n in 0..FRAMES - 1 {
         let (a, b) = (frame(n), frame(n + 1));
-        let pair = pool
-            .compute(
-                Frame::packed(&a, W, H).unwrap(),
-                Frame::packed(&b, W, H).unwrap(),
-            )
-            .unwrap();
-        let regions = cue_finder.regions(W, H, pair.pixels()).unwrap();
+        let (a, b) = (Gray::new(W, H, a).unwrap(), Gray::new(W, H, b).unwrap());
+        let fields = compute.pair(&a, &b).unwrap();
+        let fixed = reynoldsflow_host::fixed_engine::compute_fixed(
+            &a,
+            &b,
+            reynoldsflow_core::Params::DEFAULT,
+            None,
+            reynoldsflow_core::Scaling::PerFrameMinMax,
+        )
+        .unwrap();
+        let (m_d, m_c): (Vec<f32>, Vec<f32>) = fixed
+            .m_d
+            .iter()
+            .zip(&fixed.m_c)
+            .map(|(&d, &c)| (d as f32, c as f32))
+            .unzip();
+        let magnitudes = reynoldsflow_host::pair_engine::Magnitudes {
+            width: W,
+            height: H,
+            m_d: &m_d,
+            m_c: &m_c,
+            luma: &a.pixels,
+        };
+        let regions = cue_finder.regions(&magnitudes).unwrap().to_vec();
         let header = image(W, H, Vec::new(), 10 + n as i32).header;
         assert_eq!(
             images[n].header, header,
             "output {n} carries frame {n}'s header"
         );
         assert!(
-            images[n].data == pair.image(Variant::Dc),
+            images[n].data == OutputSpec::default().image(&fields),
             "output {n}: bytes"
         );
         assert_eq!(

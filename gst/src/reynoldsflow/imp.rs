@@ -1,11 +1,15 @@
 //! The element: a `BaseTransform` that keeps the previous frame's luma and,
 //! for every frame after the first, computes the pair through the host's
-//! [`PairPool`] (the core, the CLI's parameters and checks,
-//! the frame spread over `threads` cores so no latency is added).
+//! [`PairEngine`] (`run`'s path, the frame's tiles spread over `threads`
+//! cores so no latency is added), in the order the host's [`PairStream`]
+//! says (first-frame policy, restarts).
 //!
 //! Outputs are made in `generate_output`, so one input can give two
-//! outputs (`first-frame=repeat`) or none (`drop`). The pair is reset (the
-//! next frame is a first frame again) on a flush, a caps change and a stop.
+//! outputs (`first-frame=repeat`) or none (`drop`). The pair chain breaks
+//! (the next frame is a first frame again) on a flush, a stop, new caps, a
+//! gap (a GAP event or a buffer flagged GAP) and a timestamp going back; at
+//! new caps, a gap and EOS the last frame gets the output it still owes
+//! (`repeat`), so every frame gets one.
 
 use std::collections::VecDeque;
 use std::sync::{LazyLock, Mutex, MutexGuard};
@@ -17,14 +21,16 @@ use gst_base::subclass::base_transform::GenerateOutputSuccess;
 use gst_base::subclass::prelude::*;
 use gst_video::VideoFormat;
 use gst_video::prelude::*;
-use reynoldsflow_core::fixed::types::U32F32;
-use reynoldsflow_core::{Config, Frame, MAX_SIDE, Params, Pixels, Sink};
+use reynoldsflow_core::{Config, MAX_SIDE, Params};
 use reynoldsflow_cues::Region;
-use reynoldsflow_host::pair_pool::PairPool;
-use reynoldsflow_host::settings::{self as values, ScaleArg};
+use reynoldsflow_host::cues::{self as host_cues, Cues};
+use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::pair_stream::{Frame, Output, PairStream};
+use reynoldsflow_host::settings::{self as values, FirstFrame, Setting, Settings};
+use reynoldsflow_host::{Gray, HostError};
 
-use super::{FirstFrame, ScaleMode, VariantMode};
-use crate::cues::{self, Cues};
+use super::{FirstFrameMode, ScaleMode, VariantMode, message};
+use crate::cues;
 
 static CAT: LazyLock<gst::DebugCategory> = LazyLock::new(|| {
     gst::DebugCategory::new(
@@ -41,60 +47,58 @@ const FORMATS: [VideoFormat; 3] = [VideoFormat::Gray8, VideoFormat::I420, VideoF
 const ACCEPTED: &str = "reynoldsflow takes video/x-raw in GRAY8, I420 or NV12 \
     (the luma plane is used), 1 to 65535 px a side; put videoconvert before it";
 
-/// The properties (read for every frame).
+/// `threads` when unset: every core (the host's `threads: None`).
+const DEFAULT_THREADS: u32 = 0;
+/// `cues` when unset: no cues.
+const DEFAULT_CUES: bool = false;
+
+/// The host's default intensity scale as the property writes it.
+fn default_intensity_scale() -> String {
+    let s = values::DEFAULT_INTENSITY_SCALE;
+    format!("{}/{}", s.num(), s.den())
+}
+
+/// The properties (read for every frame): the host's settings, and what
+/// the element keeps as set until the next frame checks it.
 #[derive(Clone, Debug)]
-struct Settings {
-    first_frame: FirstFrame,
+struct Properties {
+    /// Every setting the element has (scale and intensity scale as below).
+    settings: Settings,
+    /// `scale`, `k-d`, `k-c` (the gains are kept with min–max too).
     scale: ScaleMode,
-    k_d: f64,
-    k_c: f64,
-    lambda: f64,
+    gains: (f64, f64),
+    /// `intensity-scale` as set.
     intensity_scale: String,
-    variant: VariantMode,
-    threads: u32,
+    /// `cues`.
     cues: bool,
-    cue_threshold: f64,
-    cue_min_area: u32,
     /// Bumped by every property change: the engine and cues are rebuilt.
     generation: u64,
 }
 
-impl Default for Settings {
+impl Default for Properties {
     fn default() -> Self {
         Self {
-            first_frame: FirstFrame::Drop,
-            scale: ScaleMode::MinMax,
-            k_d: 8.0,
-            k_c: 32.0,
-            lambda: 1e-4,
-            intensity_scale: "1/255".to_owned(),
-            variant: VariantMode::Dc,
-            threads: 0,
-            cues: false,
-            cue_threshold: 1.0,
-            cue_min_area: 4,
+            settings: Settings::default(),
+            scale: ScaleMode::of(values::DEFAULT_SCALE),
+            gains: values::DEFAULT_FIXED_GAINS,
+            intensity_scale: default_intensity_scale(),
+            cues: DEFAULT_CUES,
             generation: 0,
         }
     }
 }
 
-impl Settings {
-    /// The engine, checked as `reynoldsflow run` checks its flags.
-    fn pair_pool(&self) -> Result<PairPool, String> {
+impl Properties {
+    /// The host's settings, the intensity scale parsed (the rest is checked
+    /// when the engine is built).
+    fn settings(&self) -> Result<Settings, HostError> {
         let intensity_scale = values::parse_intensity_scale(&self.intensity_scale)
-            .map_err(|e| format!("intensity-scale: {e}"))?;
-        let scale = match self.scale {
-            ScaleMode::MinMax => ScaleArg::MinMax,
-            ScaleMode::Fixed => ScaleArg::Fixed {
-                k_d: self.k_d,
-                k_c: self.k_c,
-            },
-        };
-        let threads = match self.threads {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n as usize,
-        };
-        PairPool::new(scale, intensity_scale, self.lambda, threads).map_err(|e| e.to_string())
+            .map_err(|e| HostError::setting(Setting::IntensityScale, e))?;
+        Ok(Settings {
+            scale: self.scale.host(self.gains),
+            intensity_scale,
+            ..self.settings.clone()
+        })
     }
 }
 
@@ -128,38 +132,55 @@ impl Stamps {
     }
 }
 
-/// The frame a pair starts with.
-struct Prev {
-    /// Luma, packed (`width · height`).
-    luma: Vec<u8>,
-    stamps: Stamps,
-    /// `first-frame=repeat`: this frame still waits for its output (a
-    /// copy of the result of the pair it starts).
-    awaits_copy: bool,
+/// What goes downstream next, in order.
+enum Pending {
+    Buffer(gst::Buffer),
+    /// A gap in the input, passed on.
+    Gap(gst::Event),
 }
 
 /// The streaming state, reset on flush, caps change and stop.
-#[derive(Default)]
 struct State {
     in_info: Option<gst_video::VideoInfo>,
     out_info: Option<gst_video::VideoInfo>,
-    prev: Option<Prev>,
-    /// Outputs made from the last input, not yet handed to the base class.
-    pending: VecDeque<gst::Buffer>,
-    /// The engine and the settings generation it was built for.
-    pool: Option<(u64, PairPool)>,
-    /// The cue sink and the generation it was built for.
-    cues: Option<(u64, Box<Cues>)>,
+    stream: PairStream<Stamps>,
+    /// Outputs made from the last input, not yet handed downstream.
+    pending: VecDeque<Pending>,
+    pairs: Pairs,
     /// The next output follows a reset.
     discont: bool,
+}
+
+/// What computes the pairs.
+#[derive(Default)]
+struct Pairs {
+    /// The engine and the properties generation it was built for.
+    engine: Option<(u64, PairEngine)>,
+    /// The cues and the generation they were built for.
+    cues: Option<(u64, Cues)>,
+    /// An image's rows where the output's have padding.
+    scratch: Vec<u8>,
+}
+
+impl Default for State {
+    fn default() -> Self {
+        Self {
+            in_info: None,
+            out_info: None,
+            stream: PairStream::new(values::DEFAULT_FIRST_FRAME),
+            pending: VecDeque::new(),
+            pairs: Pairs::default(),
+            discont: true,
+        }
+    }
 }
 
 impl State {
     /// Forget the pair in progress (the next frame is a first frame).
     fn reset(&mut self) {
-        self.prev = None;
+        self.stream.reset();
         self.pending.clear();
-        self.cues = None;
+        self.pairs.cues = None;
         self.discont = true;
     }
 }
@@ -167,7 +188,7 @@ impl State {
 /// The `reynoldsflow` element.
 #[derive(Default)]
 pub struct ReynoldsFlow {
-    settings: Mutex<Settings>,
+    settings: Mutex<Properties>,
     state: Mutex<State>,
 }
 
@@ -186,14 +207,16 @@ impl ObjectSubclass for ReynoldsFlow {
 impl ObjectImpl for ReynoldsFlow {
     fn properties() -> &'static [glib::ParamSpec] {
         static PROPERTIES: LazyLock<Vec<glib::ParamSpec>> = LazyLock::new(|| {
-            let d = Settings::default();
             vec![
-                glib::ParamSpecEnum::builder_with_default("first-frame", d.first_frame)
+                glib::ParamSpecEnum::builder_with_default(
+                    "first-frame",
+                    FirstFrameMode::from(values::DEFAULT_FIRST_FRAME),
+                )
                     .nick("First frame")
                     .blurb("What the first frame of a stream gives: drop (N frames, N-1 outputs, each stamped with its first frame), repeat or black (one output per frame, stamped with it)")
                     .mutable_playing()
                     .build(),
-                glib::ParamSpecEnum::builder_with_default("scale", d.scale)
+                glib::ParamSpecEnum::builder_with_default("scale", ScaleMode::of(values::DEFAULT_SCALE))
                     .nick("Scale")
                     .blurb("Magnitudes to bytes: per-frame min-max, or the fixed gains k-d and k-c (reynoldsflow run --scale)")
                     .mutable_playing()
@@ -203,7 +226,7 @@ impl ObjectImpl for ReynoldsFlow {
                     .blurb("Gain of |v_d| (R) with scale=fixed, rounded to 1/65536")
                     .minimum(0.0)
                     .maximum(65535.0)
-                    .default_value(d.k_d)
+                    .default_value(values::DEFAULT_FIXED_GAINS.0)
                     .mutable_playing()
                     .build(),
                 glib::ParamSpecDouble::builder("k-c")
@@ -211,23 +234,26 @@ impl ObjectImpl for ReynoldsFlow {
                     .blurb("Gain of |v_c| (G) with scale=fixed, rounded to 1/65536")
                     .minimum(0.0)
                     .maximum(65535.0)
-                    .default_value(d.k_c)
+                    .default_value(values::DEFAULT_FIXED_GAINS.1)
                     .mutable_playing()
                     .build(),
                 glib::ParamSpecDouble::builder("lambda")
                     .nick("Lambda")
                     .blurb("Tikhonov term of the 2x2 solve, rounded to 2^-32 (reynoldsflow run --lambda)")
                     .minimum(0.0)
-                    .default_value(d.lambda)
+                    .default_value(values::DEFAULT_LAMBDA)
                     .mutable_playing()
                     .build(),
                 glib::ParamSpecString::builder("intensity-scale")
                     .nick("Intensity scale")
                     .blurb("s in f = pixel * s, an exact ratio or decimal (reynoldsflow run --intensity-scale)")
-                    .default_value(Some(d.intensity_scale.as_str()))
+                    .default_value(Some(default_intensity_scale().as_str()))
                     .mutable_playing()
                     .build(),
-                glib::ParamSpecEnum::builder_with_default("variant", d.variant)
+                glib::ParamSpecEnum::builder_with_default(
+                    "variant",
+                    VariantMode::from(values::DEFAULT_VARIANT),
+                )
                     .nick("Variant")
                     .blurb("The image: dc = [|v_d|, |v_c|, f], dc0, cd, hsv (reynoldsflow run --variant)")
                     .mutable_playing()
@@ -236,13 +262,13 @@ impl ObjectImpl for ReynoldsFlow {
                     .nick("Threads")
                     .blurb("Threads that compute each frame pair (0: every core); the output does not depend on it")
                     .maximum(1024)
-                    .default_value(d.threads)
+                    .default_value(DEFAULT_THREADS)
                     .mutable_playing()
                     .build(),
                 glib::ParamSpecBoolean::builder("cues")
                     .nick("Motion cues")
                     .blurb("Add a region-of-interest meta (type \"motion\") per moving region to each output and post a \"reynoldsflow-cues\" element message per output")
-                    .default_value(d.cues)
+                    .default_value(DEFAULT_CUES)
                     .mutable_playing()
                     .build(),
                 glib::ParamSpecDouble::builder("cue-threshold")
@@ -250,13 +276,13 @@ impl ObjectImpl for ReynoldsFlow {
                     .blurb("A pixel moves when |v_c| is above this, px")
                     .minimum(0.0)
                     .maximum(2_147_483_647.0)
-                    .default_value(d.cue_threshold)
+                    .default_value(values::DEFAULT_CUE_THRESHOLD)
                     .mutable_playing()
                     .build(),
                 glib::ParamSpecUInt::builder("cue-min-area")
                     .nick("Cue minimum area")
                     .blurb("Regions of fewer moving pixels are dropped")
-                    .default_value(d.cue_min_area)
+                    .default_value(values::DEFAULT_CUE_MIN_AREA)
                     .mutable_playing()
                     .build(),
             ]
@@ -265,42 +291,50 @@ impl ObjectImpl for ReynoldsFlow {
     }
 
     fn set_property(&self, _id: usize, value: &glib::Value, pspec: &glib::ParamSpec) {
-        let mut s = lock(&self.settings);
+        let mut guard = lock(&self.settings);
         let wrong = "type checked by the property's spec";
+        let p = &mut *guard;
+        let s = &mut p.settings;
         match pspec.name() {
-            "first-frame" => s.first_frame = value.get().expect(wrong),
-            "scale" => s.scale = value.get().expect(wrong),
-            "k-d" => s.k_d = value.get().expect(wrong),
-            "k-c" => s.k_c = value.get().expect(wrong),
+            "first-frame" => s.first_frame = value.get::<FirstFrameMode>().expect(wrong).into(),
+            "scale" => p.scale = value.get().expect(wrong),
+            "k-d" => p.gains.0 = value.get().expect(wrong),
+            "k-c" => p.gains.1 = value.get().expect(wrong),
             "lambda" => s.lambda = value.get().expect(wrong),
             "intensity-scale" => {
-                s.intensity_scale = value
+                p.intensity_scale = value
                     .get::<Option<String>>()
                     .expect(wrong)
-                    .unwrap_or_else(|| Settings::default().intensity_scale)
+                    .unwrap_or_else(default_intensity_scale)
             }
-            "variant" => s.variant = value.get().expect(wrong),
-            "threads" => s.threads = value.get().expect(wrong),
-            "cues" => s.cues = value.get().expect(wrong),
+            "variant" => s.variant = value.get::<VariantMode>().expect(wrong).into(),
+            "threads" => {
+                s.threads = match value.get::<u32>().expect(wrong) {
+                    0 => None,
+                    n => Some(n as usize),
+                }
+            }
+            "cues" => p.cues = value.get().expect(wrong),
             "cue-threshold" => s.cue_threshold = value.get().expect(wrong),
             "cue-min-area" => s.cue_min_area = value.get().expect(wrong),
             _ => unimplemented!("no property {}", pspec.name()),
         }
-        s.generation += 1;
+        p.generation += 1;
     }
 
     fn property(&self, _id: usize, pspec: &glib::ParamSpec) -> glib::Value {
-        let s = lock(&self.settings);
+        let p = lock(&self.settings);
+        let s = &p.settings;
         match pspec.name() {
-            "first-frame" => s.first_frame.to_value(),
-            "scale" => s.scale.to_value(),
-            "k-d" => s.k_d.to_value(),
-            "k-c" => s.k_c.to_value(),
+            "first-frame" => FirstFrameMode::from(s.first_frame).to_value(),
+            "scale" => p.scale.to_value(),
+            "k-d" => p.gains.0.to_value(),
+            "k-c" => p.gains.1.to_value(),
             "lambda" => s.lambda.to_value(),
-            "intensity-scale" => s.intensity_scale.to_value(),
-            "variant" => s.variant.to_value(),
-            "threads" => s.threads.to_value(),
-            "cues" => s.cues.to_value(),
+            "intensity-scale" => p.intensity_scale.to_value(),
+            "variant" => VariantMode::from(s.variant).to_value(),
+            "threads" => (s.threads.unwrap_or(0) as u32).to_value(),
+            "cues" => p.cues.to_value(),
             "cue-threshold" => s.cue_threshold.to_value(),
             "cue-min-area" => s.cue_min_area.to_value(),
             _ => unimplemented!("no property {}", pspec.name()),
@@ -453,8 +487,29 @@ impl BaseTransformImpl for ReynoldsFlow {
     }
 
     fn sink_event(&self, event: gst::Event) -> bool {
-        if let gst::EventView::FlushStop(_) = event.view() {
-            lock(&self.state).reset();
+        match event.view() {
+            gst::EventView::FlushStop(_) => lock(&self.state).reset(),
+            // The stream ends before new caps (the frame that owes an
+            // output is made in the old ones), at EOS and at a gap (no pair
+            // spans it; the gap goes on downstream).
+            gst::EventView::Caps(_) | gst::EventView::Eos(_) | gst::EventView::Gap(_) => {
+                if self.end_stream().is_err() {
+                    return false;
+                }
+                while let Some(next) = self.next_pending() {
+                    let pushed = match next {
+                        Pending::Buffer(buffer) => self.obj().src_pad().push(buffer).map(|_| ()),
+                        Pending::Gap(gap) => {
+                            self.obj().src_pad().push_event(gap);
+                            Ok(())
+                        }
+                    };
+                    if pushed.is_err() {
+                        break;
+                    }
+                }
+            }
+            _ => {}
         }
         self.parent_sink_event(event)
     }
@@ -467,7 +522,7 @@ impl BaseTransformImpl for ReynoldsFlow {
         // label arrives: one frame later than its timestamp.
         if direction == gst::PadDirection::Src
             && let gst::QueryViewMut::Latency(q) = query.view_mut()
-            && lock(&self.settings).first_frame != FirstFrame::Black
+            && lock(&self.settings).settings.first_frame != FirstFrame::Black
             && let Some(frame) = lock(&self.state).in_info.as_ref().and_then(frame_duration)
         {
             let (live, min, max) = q.result();
@@ -480,10 +535,17 @@ impl BaseTransformImpl for ReynoldsFlow {
         if let Some(input) = self.take_queued_buffer() {
             self.process(&input)?;
         }
-        Ok(match lock(&self.state).pending.pop_front() {
-            Some(buffer) => GenerateOutputSuccess::Buffer(buffer),
-            None => GenerateOutputSuccess::NoOutput,
-        })
+        // Each buffer returned is pushed before the next call: a gap goes
+        // out in its place among them.
+        while let Some(next) = self.next_pending() {
+            match next {
+                Pending::Buffer(buffer) => return Ok(GenerateOutputSuccess::Buffer(buffer)),
+                Pending::Gap(gap) => {
+                    self.obj().src_pad().push_event(gap);
+                }
+            }
+        }
+        Ok(GenerateOutputSuccess::NoOutput)
     }
 }
 
@@ -497,21 +559,30 @@ fn frame_duration(info: &gst_video::VideoInfo) -> Option<gst::ClockTime> {
     (num > 0).then(|| gst::ClockTime::SECOND.mul_div_floor(den, num))?
 }
 
-/// One pair's image and cues, ready to be stamped.
+/// One pair's image (not yet stamped) and cues.
 struct PairOutput {
-    rgb: Vec<u8>,
+    image: gst::Buffer,
     /// The cues' regions and level, when `cues=true`.
-    cues: Option<(Vec<Region>, U32F32)>,
+    cues: Option<(Vec<Region>, f64)>,
 }
 
 impl ReynoldsFlow {
+    fn next_pending(&self) -> Option<Pending> {
+        lock(&self.state).pending.pop_front()
+    }
+
+    /// Post `e` as an element error (a setting named by its property).
+    fn fail(&self, kind: gst::LibraryError, e: &HostError) -> gst::FlowError {
+        gst::element_imp_error!(self, kind, ("{}", message(e)));
+        gst::FlowError::Error
+    }
+
     /// Take one input frame: queue the outputs it gives.
     fn process(&self, input: &gst::Buffer) -> Result<(), gst::FlowError> {
-        let settings = lock(&self.settings).clone();
+        let properties = lock(&self.settings).clone();
         let mut state = lock(&self.state);
         let state = &mut *state;
-        let (Some(in_info), Some(out_info)) = (state.in_info.clone(), state.out_info.clone())
-        else {
+        let Some(in_info) = state.in_info.clone() else {
             gst::element_imp_error!(
                 self,
                 gst::CoreError::Negotiation,
@@ -519,6 +590,17 @@ impl ReynoldsFlow {
             );
             return Err(gst::FlowError::NotNegotiated);
         };
+        let stamps = Stamps::of(input);
+        if input.flags().contains(gst::BufferFlags::GAP) {
+            // No frame here (its bytes, if any, show nothing): the stream
+            // ends, and the gap goes on downstream in its place.
+            self.end_locked(state)?;
+            let gap = gst::event::Gap::builder(stamps.pts.unwrap_or(gst::ClockTime::ZERO))
+                .duration(stamps.duration)
+                .build();
+            state.pending.push_back(Pending::Gap(gap));
+            return Ok(());
+        }
         let (width, height) = (in_info.width() as usize, in_info.height() as usize);
         let frame = gst_video::VideoFrameRef::from_buffer_ref_readable(input.as_ref(), &in_info)
             .map_err(|_| {
@@ -531,201 +613,208 @@ impl ReynoldsFlow {
             })?;
         let stride = frame.plane_stride()[0] as usize;
         let luma = frame.plane_data(0).map_err(|_| gst::FlowError::Error)?;
-        let stamps = Stamps::of(input);
         // Checked on every frame, the first included: a bad setting stops
-        // the stream at once, with the CLI's message for its flag.
-        if state
-            .pool
+        // the stream at once, naming its property.
+        self.prepare(state, &properties)?;
+        let mut gray = state.stream.take_spare();
+        gray.pixels.clear();
+        for row in luma.chunks(stride.max(1)).take(height) {
+            gray.pixels.extend_from_slice(&row[..width.min(row.len())]);
+        }
+        (gray.width, gray.height) = (width, height);
+        let frame = Frame {
+            gray,
+            encoding: in_info.format().to_str().as_str(),
+            stamp: stamps.pts.map(|t| i128::from(t.nseconds())),
+            label: stamps,
+        };
+        let (stream, pairs) = (&mut state.stream, &mut state.pairs);
+        let out_info = state
+            .out_info
             .as_ref()
-            .is_none_or(|(g, _)| *g != settings.generation)
-        {
-            let pool = settings.pair_pool().map_err(|why| {
-                gst::element_imp_error!(self, gst::LibraryError::Settings, ("{why}"));
-                gst::FlowError::Error
-            })?;
-            state.pool = Some((settings.generation, pool));
+            .ok_or(gst::FlowError::NotNegotiated)?;
+        let step = stream.push(frame, |prev, next| self.pair(pairs, out_info, prev, next))?;
+        if let Some(restart) = &step.restart {
+            gst::info!(CAT, imp = self, "the pair chain restarts: {restart}");
         }
+        self.queue(state, step.outputs)
+    }
 
-        let Some(mut prev) = state.prev.take() else {
-            if settings.first_frame == FirstFrame::Black {
-                let black = vec![0u8; 3 * width * height];
-                let out = self.output(state, &out_info, &black, &stamps, None)?;
-                state.pending.push_back(out);
-            }
-            state.prev = Some(Prev {
-                luma: packed(luma, width, height, stride),
-                stamps,
-                awaits_copy: settings.first_frame == FirstFrame::Repeat,
-            });
-            return Ok(());
-        };
-
-        let result = self.compute(state, &settings, &prev.luma, luma, width, height, stride)?;
-        if prev.awaits_copy {
-            let copy = self.output(
-                state,
-                &out_info,
-                &result.rgb,
-                &prev.stamps,
-                result.cues.as_ref(),
-            )?;
-            state.pending.push_back(copy);
+    /// Build the engine and the cues anew when a property changed.
+    fn prepare(&self, state: &mut State, properties: &Properties) -> Result<(), gst::FlowError> {
+        let generation = properties.generation;
+        let settings = properties
+            .settings()
+            .map_err(|e| self.fail(gst::LibraryError::Settings, &e))?;
+        let pairs = &mut state.pairs;
+        if pairs.engine.as_ref().is_none_or(|(g, _)| *g != generation) {
+            let engine = PairEngine::new(&settings)
+                .map_err(|e| self.fail(gst::LibraryError::Settings, &e))?
+                .keep_magnitudes(properties.cues);
+            pairs.engine = Some((generation, engine));
         }
-        let label = match settings.first_frame {
-            FirstFrame::Drop => prev.stamps,
-            FirstFrame::Repeat | FirstFrame::Black => stamps,
-        };
-        let out = self.output(state, &out_info, &result.rgb, &label, result.cues.as_ref())?;
-        state.pending.push_back(out);
-        // The next pair starts with this frame (the allocation is reused).
-        prev.luma.clear();
-        pack_into(&mut prev.luma, luma, width, height, stride);
-        prev.stamps = stamps;
-        prev.awaits_copy = false;
-        state.prev = Some(prev);
+        let built = pairs.cues.as_ref().is_some_and(|(g, _)| *g == generation);
+        if properties.cues && !built {
+            let cues =
+                Cues::new(&settings).map_err(|e| self.fail(gst::LibraryError::Settings, &e))?;
+            pairs.cues = Some((generation, cues));
+        }
+        state.stream.set_first_frame(settings.first_frame);
         Ok(())
     }
 
-    /// The pair `(prev, next)` through the engine (rebuilt when a property
-    /// changed), and its cues.
-    #[allow(clippy::too_many_arguments)]
-    fn compute(
-        &self,
-        state: &mut State,
-        settings: &Settings,
-        prev: &[u8],
-        next: &[u8],
-        width: usize,
-        height: usize,
-        stride: usize,
-    ) -> Result<PairOutput, gst::FlowError> {
-        let settings_error = |why: String| {
-            gst::element_imp_error!(self, gst::LibraryError::Settings, ("{why}"));
-            gst::FlowError::Error
-        };
-        let Some((_, pool)) = state.pool.as_mut() else {
-            unreachable!("process builds it first")
-        };
-        let frames = (
-            Frame::packed(prev, width, height),
-            Frame::new(next, width, height, stride),
-        );
-        let (Ok(prev), Ok(next)) = frames else {
-            gst::element_imp_error!(
-                self,
-                gst::StreamError::Format,
-                ("Frames of {width}x{height} do not fit their buffers")
-            );
-            return Err(gst::FlowError::Error);
-        };
-        let pixels = pool.compute(prev, next).map_err(|e| {
-            gst::element_imp_error!(self, gst::StreamError::Failed, ("{e}"));
-            gst::FlowError::Error
-        })?;
-        let rgb = pixels.image(settings.variant.host());
-        let cues = match settings.cues {
-            false => None,
-            true => {
-                if state
-                    .cues
-                    .as_ref()
-                    .is_none_or(|(g, _)| *g != settings.generation)
-                {
-                    // The grid depends on the frame size only.
-                    let config = Config::new(width, height, Params::DEFAULT)
-                        .map_err(|e| settings_error(e.to_string()))?;
-                    let params = cues::params(settings.cue_threshold, settings.cue_min_area)
-                        .map_err(settings_error)?;
-                    let sink = cues::new_cues(&config, params).map_err(|e| {
-                        settings_error(format!(
-                            "cues: {e} (they cover frames up to {} px a side)",
-                            cues::MAX_SIDE
-                        ))
-                    })?;
-                    state.cues = Some((settings.generation, sink));
-                }
-                let Some((_, sink)) = state.cues.as_mut() else {
-                    unreachable!("built above")
-                };
-                // Whole rows in raster order: the cues are the same for any
-                // order the engine's tiles would have given (the cues crate's
-                // doc).
-                // The cues read the magnitudes only (`reads_fields` is false).
-                let (mut m_d, mut m_c, mut luma) = (Vec::new(), Vec::new(), Vec::new());
-                for (y, row) in pixels.pixels().chunks(width).enumerate() {
-                    m_d.clear();
-                    m_d.extend(row.iter().map(|p| p.m_d));
-                    m_c.clear();
-                    m_c.extend(row.iter().map(|p| p.m_c));
-                    luma.clear();
-                    luma.extend(row.iter().map(|p| p.luma));
-                    let fields = None;
-                    sink.row(
-                        y,
-                        0,
-                        Pixels {
-                            m_d: &m_d,
-                            m_c: &m_c,
-                            luma: &luma,
-                            fields,
-                        },
-                    );
-                }
-                let regions = sink.end_frame().to_vec();
-                Some((regions, sink.last_frame().level))
-            }
-        };
-        Ok(PairOutput { rgb, cues })
+    /// The stream ends here: queue the output its last frame still owes.
+    fn end_stream(&self) -> Result<(), gst::FlowError> {
+        let mut state = lock(&self.state);
+        self.end_locked(&mut state)
     }
 
-    /// An output buffer: `rgb` in the negotiated layout, stamped, with its
-    /// cues as metas (and their message posted).
-    fn output(
+    fn end_locked(&self, state: &mut State) -> Result<(), gst::FlowError> {
+        let (stream, pairs) = (&mut state.stream, &mut state.pairs);
+        let Some(out_info) = state.out_info.as_ref() else {
+            stream.reset();
+            return Ok(());
+        };
+        let owed = stream.end(|prev, next| self.pair(pairs, out_info, prev, next))?;
+        self.queue(state, owed.into_iter().collect())
+    }
+
+    /// The pair `(prev, next)` through the engine, into a new output
+    /// buffer, and its cues.
+    fn pair(
         &self,
-        state: &mut State,
+        pairs: &mut Pairs,
         out_info: &gst_video::VideoInfo,
-        rgb: &[u8],
-        stamps: &Stamps,
-        cues: Option<&(Vec<Region>, U32F32)>,
-    ) -> Result<gst::Buffer, gst::FlowError> {
-        let mut buffer =
+        prev: &Gray,
+        next: &Gray,
+    ) -> Result<PairOutput, gst::FlowError> {
+        let Pairs {
+            engine,
+            cues,
+            scratch,
+        } = pairs;
+        let Some((_, engine)) = engine.as_mut() else {
+            return Err(gst::FlowError::NotNegotiated);
+        };
+        let failed = |e: HostError| {
+            gst::element_imp_error!(self, gst::StreamError::Failed, ("{}", message(&e)));
+            gst::FlowError::Error
+        };
+        let (width, height) = prev.size();
+        let row = 3 * width;
+        let mut image =
             gst::Buffer::with_size(out_info.size()).map_err(|_| gst::FlowError::Error)?;
         {
-            let buffer = buffer.get_mut().expect("a new buffer is writable");
-            stamps.apply(buffer);
-            if std::mem::take(&mut state.discont) {
-                buffer.set_flags(gst::BufferFlags::DISCONT);
-            }
+            let buffer = image.get_mut().expect("a new buffer is writable");
             let mut frame = gst_video::VideoFrameRef::from_buffer_ref_writable(buffer, out_info)
                 .map_err(|_| gst::FlowError::Error)?;
             let stride = frame.plane_stride()[0] as usize;
-            let row_bytes = 3 * out_info.width() as usize;
             let plane = frame.plane_data_mut(0).map_err(|_| gst::FlowError::Error)?;
-            for (dst, src) in plane.chunks_mut(stride).zip(rgb.chunks(row_bytes)) {
-                dst[..row_bytes].copy_from_slice(src);
+            if stride == row {
+                // Straight into the output.
+                let plane = plane.get_mut(..row * height).ok_or(gst::FlowError::Error)?;
+                engine.image(prev, next, plane).map_err(failed)?;
+            } else {
+                scratch.resize(row * height, 0);
+                engine.image(prev, next, scratch).map_err(failed)?;
+                copy_rows(plane, stride, scratch, row);
             }
         }
+        let cues = match cues.as_mut() {
+            Some((_, cues)) => {
+                let magnitudes = engine.magnitudes().ok_or(gst::FlowError::Error)?;
+                let regions = cues.regions(&magnitudes).map_err(|e| {
+                    gst::element_imp_error!(
+                        self,
+                        gst::LibraryError::Settings,
+                        (
+                            "cues: {e} (they cover frames up to {} px a side)",
+                            host_cues::MAX_SIDE
+                        )
+                    );
+                    gst::FlowError::Error
+                })?;
+                let regions = regions.to_vec();
+                Some((regions, cues.level()))
+            }
+            None => None,
+        };
+        Ok(PairOutput { image, cues })
+    }
+
+    /// Stamp `outputs` and queue them.
+    fn queue(
+        &self,
+        state: &mut State,
+        outputs: Vec<Output<PairOutput, Stamps>>,
+    ) -> Result<(), gst::FlowError> {
+        for output in outputs {
+            match output {
+                Output::Black { label, .. } => {
+                    let size = state
+                        .out_info
+                        .as_ref()
+                        .ok_or(gst::FlowError::NotNegotiated)?
+                        .size();
+                    let mut image =
+                        gst::Buffer::with_size(size).map_err(|_| gst::FlowError::Error)?;
+                    image
+                        .get_mut()
+                        .expect("a new buffer is writable")
+                        .map_writable()
+                        .map_err(|_| gst::FlowError::Error)?
+                        .fill(0);
+                    let out = self.stamped(state, image, &label, None);
+                    state.pending.push_back(Pending::Buffer(out));
+                }
+                Output::Result { result, labels } => {
+                    let last = labels.len().saturating_sub(1);
+                    for (i, label) in labels.iter().enumerate() {
+                        // A copy shares the image's memory.
+                        let image = match i == last {
+                            true => result.image.clone(),
+                            false => result.image.copy(),
+                        };
+                        let out = self.stamped(state, image, label, result.cues.as_ref());
+                        state.pending.push_back(Pending::Buffer(out));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `image` stamped, with its cues as metas (and their message posted).
+    fn stamped(
+        &self,
+        state: &mut State,
+        mut image: gst::Buffer,
+        stamps: &Stamps,
+        cues: Option<&(Vec<Region>, f64)>,
+    ) -> gst::Buffer {
+        let buffer = image.make_mut();
+        stamps.apply(buffer);
+        if std::mem::take(&mut state.discont) {
+            buffer.set_flags(gst::BufferFlags::DISCONT);
+        }
         if let Some((regions, level)) = cues {
-            cues::add_metas(buffer.get_mut().expect("not shared yet"), regions);
+            cues::add_metas(buffer, regions);
             let structure = cues::message_structure(stamps.pts, *level, regions);
             let message = gst::message::Element::builder(structure)
                 .src(&*self.obj())
                 .build();
             let _ = self.obj().post_message(message);
         }
-        Ok(buffer)
+        image
     }
 }
 
-/// `height` rows of `width` bytes from a plane with `stride`, packed.
-fn packed(plane: &[u8], width: usize, height: usize, stride: usize) -> Vec<u8> {
-    let mut out = Vec::with_capacity(width * height);
-    pack_into(&mut out, plane, width, height, stride);
-    out
-}
-
-fn pack_into(out: &mut Vec<u8>, plane: &[u8], width: usize, height: usize, stride: usize) {
-    for row in plane.chunks(stride.max(1)).take(height) {
-        out.extend_from_slice(&row[..width.min(row.len())]);
+/// `rgb`'s rows of `row` bytes into `plane`, rows `stride` bytes apart,
+/// the padding after each row zero (no byte leaves unwritten).
+fn copy_rows(plane: &mut [u8], stride: usize, rgb: &[u8], row: usize) {
+    for (dst, src) in plane.chunks_mut(stride).zip(rgb.chunks(row)) {
+        let (pixels, padding) = dst.split_at_mut(row.min(dst.len()));
+        pixels.copy_from_slice(&src[..pixels.len()]);
+        padding.fill(0);
     }
 }

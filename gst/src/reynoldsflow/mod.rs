@@ -2,6 +2,9 @@
 
 use gst::glib;
 use gst::prelude::*;
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::outputs::Variant;
+use reynoldsflow_host::settings::{FirstFrame, ScaleArg, Setting};
 
 mod imp;
 
@@ -11,39 +14,61 @@ glib::wrapper! {
         @extends gst_base::BaseTransform, gst::Element, gst::Object;
 }
 
-/// `first-frame`: what the first frame of a stream (after a start, a flush
-/// or a caps change), which has no pair yet, gives.
-#[derive(Debug, Eq, PartialEq, Ord, PartialOrd, Hash, Clone, Copy, Default, glib::Enum)]
+/// The values of the enum properties: the host's settings
+/// ([`reynoldsflow_host::settings`]) as GObject enums, whose nicks are the
+/// host's names (a test holds them to the host's lists).
+///
+/// `first-frame`: what the first frame of a stream (after a start, a
+/// flush, a caps change, a gap or a timestamp going back), which has no
+/// pair yet, gives ([`FirstFrame`]).
+#[derive(Debug, Eq, PartialEq, Ord, PartialOrd, Hash, Clone, Copy, glib::Enum)]
 #[repr(u32)]
 #[enum_type(name = "GstReynoldsFlowFirstFrame")]
-pub enum FirstFrame {
-    /// Nothing: N frames give N − 1 outputs, result n stamped with frame n
-    /// (SPEC §5), as `reynoldsflow run` labels it.
-    #[default]
+pub enum FirstFrameMode {
+    /// [`FirstFrame::Drop`].
     #[enum_value(
         name = "Drop: N frames give N-1 outputs, each stamped with its first frame",
         nick = "drop"
     )]
     Drop,
-    /// One output per frame with that frame's timestamps: frame n ≥ 1
-    /// carries result n − 1 (the motion into it); frame 0 a copy of result 0.
+    /// [`FirstFrame::Repeat`].
     #[enum_value(
         name = "Repeat: one output per frame, the first a copy of the second",
         nick = "repeat"
     )]
     Repeat,
-    /// One output per frame as `repeat`, frame 0 an all-zero (black) image.
+    /// [`FirstFrame::Black`].
     #[enum_value(name = "Black: one output per frame, the first black", nick = "black")]
     Black,
 }
 
-/// `scale`: how magnitudes become bytes (the CLI's `--scale`).
-#[derive(Debug, Eq, PartialEq, Ord, PartialOrd, Hash, Clone, Copy, Default, glib::Enum)]
+impl From<FirstFrame> for FirstFrameMode {
+    fn from(f: FirstFrame) -> Self {
+        match f {
+            FirstFrame::Drop => Self::Drop,
+            FirstFrame::Repeat => Self::Repeat,
+            FirstFrame::Black => Self::Black,
+        }
+    }
+}
+
+impl From<FirstFrameMode> for FirstFrame {
+    fn from(f: FirstFrameMode) -> Self {
+        match f {
+            FirstFrameMode::Drop => Self::Drop,
+            FirstFrameMode::Repeat => Self::Repeat,
+            FirstFrameMode::Black => Self::Black,
+        }
+    }
+}
+
+/// `scale`: how magnitudes become bytes ([`ScaleArg`], its gains the
+/// `k-d` and `k-c` properties).
+#[derive(Debug, Eq, PartialEq, Ord, PartialOrd, Hash, Clone, Copy, glib::Enum)]
 #[repr(u32)]
 #[enum_type(name = "GstReynoldsFlowScale")]
 pub enum ScaleMode {
     /// Per-frame min–max.
-    #[default]
     #[enum_value(name = "Per-frame min-max", nick = "minmax")]
     MinMax,
     /// Constant gains `k-d` and `k-c`.
@@ -51,38 +76,89 @@ pub enum ScaleMode {
     Fixed,
 }
 
-/// `variant`: which image (the CLI's `--variant`).
-#[derive(Debug, Eq, PartialEq, Ord, PartialOrd, Hash, Clone, Copy, Default, glib::Enum)]
+impl ScaleMode {
+    /// The mode of `scale`.
+    pub const fn of(scale: ScaleArg) -> Self {
+        match scale {
+            ScaleArg::MinMax => Self::MinMax,
+            ScaleArg::Fixed { .. } => Self::Fixed,
+        }
+    }
+
+    /// The host's scale, with gains `(k_d, k_c)` where fixed.
+    pub fn host(self, (k_d, k_c): (f64, f64)) -> ScaleArg {
+        match self {
+            Self::MinMax => ScaleArg::MinMax,
+            Self::Fixed => ScaleArg::Fixed { k_d, k_c },
+        }
+    }
+}
+
+/// `variant`: which image ([`Variant`]).
+#[derive(Debug, Eq, PartialEq, Ord, PartialOrd, Hash, Clone, Copy, glib::Enum)]
 #[repr(u32)]
 #[enum_type(name = "GstReynoldsFlowVariant")]
 pub enum VariantMode {
-    /// `[|v_d|, |v_c|, f]`, the ReynoldsFlow representation.
-    #[default]
+    /// [`Variant::Dc`].
     #[enum_value(
         name = "[|v_d|, |v_c|, f]: the ReynoldsFlow representation",
         nick = "dc"
     )]
     Dc,
-    /// `[|v_d|, 0, f]`.
+    /// [`Variant::Dc0`].
     #[enum_value(name = "[|v_d|, 0, f]", nick = "dc0")]
     Dc0,
-    /// `[|v_c|, |v_d|, f]`.
+    /// [`Variant::Cd`].
     #[enum_value(name = "[|v_c|, |v_d|, f]", nick = "cd")]
     Cd,
-    /// Middlebury colour wheel of `v_R`.
+    /// [`Variant::Hsv`].
     #[enum_value(name = "Colour wheel of v_R", nick = "hsv")]
     Hsv,
 }
 
-impl VariantMode {
-    fn host(self) -> reynoldsflow_host::outputs::Variant {
-        use reynoldsflow_host::outputs::Variant;
-        match self {
-            VariantMode::Dc => Variant::Dc,
-            VariantMode::Dc0 => Variant::Dc0,
-            VariantMode::Cd => Variant::Cd,
-            VariantMode::Hsv => Variant::Hsv,
+impl From<Variant> for VariantMode {
+    fn from(v: Variant) -> Self {
+        match v {
+            Variant::Dc => Self::Dc,
+            Variant::Dc0 => Self::Dc0,
+            Variant::Cd => Self::Cd,
+            Variant::Hsv => Self::Hsv,
         }
+    }
+}
+
+impl From<VariantMode> for Variant {
+    fn from(v: VariantMode) -> Self {
+        match v {
+            VariantMode::Dc => Self::Dc,
+            VariantMode::Dc0 => Self::Dc0,
+            VariantMode::Cd => Self::Cd,
+            VariantMode::Hsv => Self::Hsv,
+        }
+    }
+}
+
+/// The element's name for a host setting: its property (the settings it
+/// has no property for keep the host's names).
+pub fn property(setting: Setting) -> &'static str {
+    match setting {
+        Setting::FirstFrame => "first-frame",
+        Setting::Scale => "scale",
+        Setting::Lambda => "lambda",
+        Setting::IntensityScale => "intensity-scale",
+        Setting::Variant => "variant",
+        Setting::Threads => "threads",
+        Setting::CueThreshold => "cue-threshold",
+        Setting::CueMinArea => "cue-min-area",
+        setting => setting.name(),
+    }
+}
+
+/// A host error as the element says it: a setting named by its property.
+pub(crate) fn message(e: &HostError) -> String {
+    match e {
+        HostError::Setting { setting, problem } => format!("{}: {problem}", property(*setting)),
+        e => e.to_string(),
     }
 }
 
