@@ -138,6 +138,22 @@ fn assert_nothing_partial(
     kept
 }
 
+fn modified(path: &Path) -> std::time::SystemTime {
+    fs::metadata(path).unwrap().modified().unwrap()
+}
+
+/// Put a source file back as it was, its modification time included (a
+/// dataset marker records it: a changed time is a changed source).
+fn restore(path: &Path, bytes: &[u8], time: std::time::SystemTime) {
+    fs::write(path, bytes).unwrap();
+    fs::File::options()
+        .write(true)
+        .open(path)
+        .unwrap()
+        .set_modified(time)
+        .unwrap();
+}
+
 /// The rerun of the same command completes the tree to the undisturbed bytes.
 fn assert_rerun_completes(
     src: &Path,
@@ -255,6 +271,7 @@ fn an_input_that_disappears_while_read() {
     let work = tempfile::tempdir().unwrap();
     let src = work.path().join("src");
     let frames = frame_folder(&src.join("seq"), 60);
+    let times: Vec<_> = frames.iter().map(|(p, _)| modified(p)).collect();
     let reference = undisturbed(&src, 1);
     let dst = work.path().join("dst");
     let mut child = spawn(&dataset_args(&src, &dst, 1));
@@ -270,8 +287,8 @@ fn an_input_that_disappears_while_read() {
     );
     let kept = assert_nothing_partial(&dst, &reference, false);
     assert!(kept >= 5 && kept < reference.len(), "{kept}");
-    for (path, bytes) in &frames[30..] {
-        fs::write(path, bytes).unwrap();
+    for ((path, bytes), time) in frames.iter().zip(times).skip(30) {
+        restore(path, bytes, time);
     }
     assert_rerun_completes(&src, &dst, 1, &reference);
 }
@@ -283,6 +300,7 @@ fn an_input_truncated_while_read() {
     video_tree(&src, 1, 60);
     let clip = src.join("clip0.y4m");
     let whole = fs::read(&clip).unwrap();
+    let time = modified(&clip);
     let reference = undisturbed(&src, 1);
     let dst = work.path().join("dst");
     let mut child = spawn(&dataset_args(&src, &dst, 1));
@@ -306,7 +324,7 @@ fn an_input_truncated_while_read() {
     );
     let kept = assert_nothing_partial(&dst, &reference, false);
     assert!(kept >= 5 && kept < reference.len(), "{kept}");
-    fs::write(&clip, &whole).unwrap();
+    restore(&clip, &whole, time);
     assert_rerun_completes(&src, &dst, 1, &reference);
 }
 

@@ -428,7 +428,7 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
         let summary = pipeline::process(&mut *source, &compute, dest, options, &mut tick);
         (summary, "stdout".to_owned())
     } else {
-        let dir = DirWriter::prepare(&args.out, &spec)?;
+        let dir = DirWriter::prepare(&args.out, &spec)?.in_background(outputs::WRITER_THREADS)?;
         let summary = pipeline::process(
             &mut *source,
             &compute,
