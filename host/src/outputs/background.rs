@@ -2,8 +2,10 @@
 //! encoded and its files written (each flushed to disk before it is
 //! renamed into place) while the engine's thread computes the next pair.
 //!
-//! A bounded queue holds at most as many waiting jobs as there are threads,
-//! so memory stays bounded when the disk is slower than the engine. The
+//! A job is handed over only when a thread is free to take it (no queue),
+//! so at most one job a thread is held beyond the caller's own, whatever
+//! the speed of the disk: at 3840×2160 with `--npy` a result's fields are
+//! 265 MB. The
 //! first failure is kept and returned by the next [`Stage::submit`] or by
 //! [`Stage::flush`], which waits until every job submitted is done.
 
@@ -54,7 +56,7 @@ impl<J: Send + 'static> Stage<J> {
         work: impl Fn(J) -> Result<(), HostError> + Send + Sync + 'static,
     ) -> Result<Self, HostError> {
         let threads = threads.max(1);
-        let (tx, rx) = mpsc::sync_channel::<J>(threads);
+        let (tx, rx) = mpsc::sync_channel::<J>(0);
         let rx = Arc::new(Mutex::new(rx));
         let work = Arc::new(work);
         let state = Arc::new(State::default());
@@ -74,7 +76,7 @@ impl<J: Send + 'static> Stage<J> {
         Ok(stage)
     }
 
-    /// Queue `job` (waiting while the queue is full); an earlier job's
+    /// Hand `job` over (waiting until a thread is free); an earlier job's
     /// failure instead, if there was one.
     pub(crate) fn submit(&self, job: J) -> Result<(), HostError> {
         {
