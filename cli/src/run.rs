@@ -164,8 +164,8 @@ pub struct OutputArgs {
     pub jpeg_subsampling: Option<JpegSubsampling>,
     /// PNG compression, lossless at every setting: fast (fdeflate, the
     /// PNG-tuned DEFLATE), default (zlib's default level) or best (zlib's
-    /// best); on real footage fast is an order of magnitude faster than
-    /// default, the files as small (docs/PERFORMANCE.md) [default: fast].
+    /// best); at 640x480 fast is an order of magnitude faster than default,
+    /// the files about as small (docs/PERFORMANCE.md) [default: fast].
     #[arg(long, value_name = "fast|default|best", value_parser = choice::<PngCompression>())]
     pub png_compression: Option<PngCompression>,
     /// Also write fields as Middlebury .flo (f32 u, v) in
@@ -456,7 +456,7 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
         let summary = pipeline::process(&mut *source, &compute, dest, options, &mut tick);
         (summary, "stdout".to_owned())
     } else {
-        let dir = DirWriter::prepare(&args.out, &spec)?;
+        let dir = DirWriter::prepare(&args.out, &spec)?.in_background(outputs::WRITER_THREADS)?;
         let summary = pipeline::process(
             &mut *source,
             &compute,

@@ -156,9 +156,9 @@ pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PngCompression {
     /// fdeflate's PNG-tuned DEFLATE (the `png` crate's fast path), adaptive
-    /// row filters, as the `image` crate's encoder defaults to: on real
-    /// footage at 640×480 an order of magnitude faster than `Default`, the
-    /// files as small or smaller (docs/PERFORMANCE.md, `scripts/bench-dataset`).
+    /// row filters, as the `image` crate's encoder defaults to: at 640×480
+    /// an order of magnitude faster than `Default`, the files about as
+    /// small (docs/PERFORMANCE.md, `scripts/bench-dataset`).
     #[default]
     Fast,
     /// zlib's default level (flate2).

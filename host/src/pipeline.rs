@@ -493,7 +493,7 @@ pub fn process(
     let buffers = &buffers;
     let desk = &Desk::new(threads);
 
-    std::thread::scope(|scope| {
+    let result = std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
         let stop = &stop;
         scope.spawn(move || {
@@ -535,7 +535,13 @@ pub fn process(
             error: None,
         };
         collector.collect(msg_rx, on_output)
-    })
+    });
+    // Files still being written in the background are complete before
+    // this returns, whatever happened (the run's own error comes first).
+    let flushed = dir.map_or(Ok(()), DirWriter::flush);
+    let summary = result?;
+    flushed?;
+    Ok(summary)
 }
 
 /// The reader's channels: pairs out, tokens in, messages to the collector.
@@ -707,7 +713,9 @@ impl Worker<'_> {
         if self.needs_fields {
             let fields = self.compute.pair_with(&mut self.engine, prev, next)?;
             if let Some(dir) = self.dir {
-                dir.write(&stem, &fields)?;
+                // A folder is the run's one destination: the fields go to it.
+                dir.write(&stem, fields)?;
+                return Ok(None);
             }
             if let Some(spec) = self.samples {
                 return Ok(Some(Sample {

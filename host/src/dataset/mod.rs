@@ -10,16 +10,27 @@
 //!
 //! **Resume.** An item is finished when its output folder holds the marker
 //! `.reynoldsflow-done`, written (atomically) after the item's last output.
-//! It records the settings; a rerun skips items whose marker matches the
-//! current settings and redoes the rest (`force` redoes everything).
-//! Every output file is written under a hidden temp name and renamed, so
-//! no file under a final name is ever partial; the temp files a killed run
-//! leaves are removed when its item is redone.
+//! It records the settings, the source's stamp ([`source_stamp`]) and every
+//! output file with its size; a rerun skips items whose marker matches the
+//! current settings and source and whose files are all there at those
+//! sizes, and redoes the rest (`force` redoes everything). A redo first
+//! removes the files the old marker lists and any file named as one of the
+//! item's results (what a killed run leaves), so the folder holds exactly
+//! what the new settings write. Every output file is written under a hidden
+//! temp name and renamed, so no file under a final name is ever partial;
+//! the temp files a killed run leaves are removed when its item is redone.
+//!
+//! **Paths.** Items that would share an output folder, or whose folder is
+//! another item's side-output folder (`hsv/`, `v_R/`, …), are refused
+//! before anything runs (by the front end, which sees every item). Several
+//! processes share one destination through [`Shard`]s, never by running
+//! the same job twice.
 //!
 //! **Clusters.** A [`Shard`] takes its share of the items by a hash of
 //! their paths, so `N` processes share one dataset and one destination;
 //! each item's [`Record`] is one JSON line of a [`StatusLog`].
 
+use std::collections::HashSet;
 use std::fs;
 use std::path::{Component, Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -427,36 +438,78 @@ fn source_stamp(item: &Item) -> Result<String, HostError> {
     ))
 }
 
-/// The journal of an item being made: every output file, named before it
-/// is put in place, so that a redo after a kill finds them all.
-pub const JOURNAL: &str = ".reynoldsflow-partial";
-
 /// The sub-folders of an item's folder its side outputs go to, under any
-/// settings.
-const SIDE_FOLDERS: [&str; 4] = ["hsv", "v_c", "v_d", "v_R"];
+/// settings, with the extensions of their files; `""`: the folder itself.
+const OUTPUT_FOLDERS: [(&str, [&str; 2]); 5] = [
+    ("", ["png", "jpg"]),
+    ("hsv", ["png", "jpg"]),
+    ("v_c", ["npy", "flo"]),
+    ("v_d", ["npy", "flo"]),
+    ("v_R", ["npy", "flo"]),
+];
 
-/// Remove what earlier runs made in `out`: the files `old`'s marker lists
-/// and those a killed run's journal names (nothing else: a folder of an
-/// item inside, or the user's own files, stay), then the marker, then the
-/// side-output folders left empty. Files first: a kill in between leaves a
-/// marker whose files are missing, which is redone.
-fn remove_earlier_outputs(out: &Path, old: Option<&Marker>) -> Result<(), HostError> {
-    let journal = fs::read_to_string(out.join(JOURNAL)).unwrap_or_default();
-    let listed = old
-        .into_iter()
-        .flat_map(|m| m.files.iter().map(|(_, p)| p.as_path()));
-    for rel in listed.chain(journal.lines().map(Path::new)) {
+/// Whether `stem` names a result of `item` under some settings: a frame's
+/// stem (a video's frames are numbered, `000000`, …; a frame folder's are
+/// its files' stems) or two of them joined by `_` (`--step`, `--fps`).
+fn result_stems(item: &Item) -> impl Fn(&str) -> bool + use<> {
+    let frames: Option<HashSet<String>> = item.frames.then(|| {
+        crate::sequence::folder::list(&item.src, |name| is_frame_file(Path::new(name)))
+            .unwrap_or_default()
+            .iter()
+            .filter_map(|f| Some(f.file_stem()?.to_str()?.to_owned()))
+            .collect()
+    });
+    let frame = move |s: &str| match &frames {
+        Some(stems) => stems.contains(s),
+        None => s.len() >= 6 && s.bytes().all(|b| b.is_ascii_digit()),
+    };
+    move |stem: &str| {
+        frame(stem)
+            || stem
+                .match_indices('_')
+                .any(|(i, _)| frame(&stem[..i]) && frame(&stem[i + 1..]))
+    }
+}
+
+/// Remove what earlier runs made in `out`: the files `old`'s marker lists,
+/// and every file named as one of `item`'s results (in the folder, as an
+/// image; in `hsv/`, `v_c/`, `v_d/`, `v_R/`, as their files), which a run
+/// killed before its marker leaves; then the marker, then those
+/// sub-folders left empty. Nothing else (a folder of an item inside, or
+/// files of other names) is touched. Files first: a kill in between leaves
+/// a marker whose files are missing, which is redone.
+fn remove_earlier_outputs(out: &Path, old: Option<&Marker>, item: &Item) -> Result<(), HostError> {
+    for (_, rel) in old.iter().flat_map(|m| &m.files) {
         // Only paths inside the folder, as this tool writes them.
-        let inside = rel.components().next().is_some()
-            && rel.components().all(|c| matches!(c, Component::Normal(_)));
-        if inside {
+        if rel.components().next().is_some()
+            && rel.components().all(|c| matches!(c, Component::Normal(_)))
+        {
             remove_if_present(&out.join(rel))?;
         }
     }
+    let is_result = result_stems(item);
+    for (sub, extensions) in OUTPUT_FOLDERS {
+        let dir = out.join(sub);
+        let Ok(entries) = fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let Some((stem, ext)) = name.to_str().and_then(|n| n.rsplit_once('.')) else {
+                continue;
+            };
+            if extensions.contains(&ext)
+                && is_result(stem)
+                && entry.file_type().is_ok_and(|t| t.is_file())
+            {
+                remove_if_present(&entry.path())?;
+            }
+        }
+    }
     remove_if_present(&out.join(MARKER))?;
-    for side in SIDE_FOLDERS {
+    for (sub, _) in &OUTPUT_FOLDERS[1..] {
         // Fails, as it should, unless the folder is empty.
-        let _ = fs::remove_dir(out.join(side));
+        let _ = fs::remove_dir(out.join(sub));
     }
     Ok(())
 }
@@ -564,11 +617,12 @@ impl ItemRunner {
         }
         let result = (|| -> Result<Summary, HostError> {
             if out.is_dir() {
-                remove_earlier_outputs(out, old.as_ref())?;
+                remove_earlier_outputs(out, old.as_ref(), item)?;
             }
             let mut source = open_item(&item.src, item.frames, &self.plan)?;
-            let journal = out.join(JOURNAL);
-            let dir = DirWriter::prepare(out, &self.spec)?.journaled(&journal)?;
+            let dir = DirWriter::prepare(out, &self.spec)?
+                .recording()
+                .in_background(crate::outputs::WRITER_THREADS)?;
             let summary = pipeline::process(
                 &mut *source,
                 &self.compute,
@@ -583,7 +637,6 @@ impl ItemRunner {
             let stamp = stamp.as_deref().unwrap_or("unknown");
             let text = marker_text(item, &summary, &self.fingerprint, stamp, &dir.written());
             atomic::write_file(&out.join(MARKER), text.as_bytes())?;
-            remove_if_present(&journal)?;
             Ok(summary)
         })();
         match result {

@@ -23,9 +23,8 @@
 //! ([`StreamFormat`]).
 
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use npyz::WriterBuilder;
 
@@ -33,7 +32,9 @@ pub use crate::image_io::{JpegSubsampling, PngCompression};
 use crate::page_buffer::ByteBuffer;
 use crate::settings::choices;
 use crate::{FlowPlanes, HostError, atomic, image_io, viz};
+use background::Stage;
 
+mod background;
 #[cfg(feature = "crash-injection")]
 pub mod crash_injection;
 pub mod flo;
@@ -529,25 +530,33 @@ fn y4m_frame_write(rgb: &[u8], out: &mut [u8]) {
     }
 }
 
-/// Writes results into an output folder.
+/// The threads of a [`DirWriter::in_background`] of `run` and `dataset`:
+/// two, so that one result's files are flushed to disk while the next
+/// one's are encoded (a flush costs some milliseconds, as long as the
+/// engine's pair at 640×480).
+pub const WRITER_THREADS: usize = 2;
+
+/// Writes results into an output folder: in the caller's thread, or
+/// ([`DirWriter::in_background`]) encoded and written by threads of its own.
 #[derive(Debug)]
 pub struct DirWriter {
-    root: PathBuf,
-    spec: OutputSpec,
-    journal: Option<Mutex<Journal>>,
+    folder: Arc<Folder>,
+    background: Option<Stage<Output>>,
 }
 
-/// The files a [`DirWriter`] has written, each named in the journal file
-/// before it appears under its final name: a killed run's outputs can be
-/// found and removed by the next one ([`DirWriter::journaled`]).
-///
-/// The journal is opened for each line and closed again: a file held open
-/// for writing through a whole item would, for one, keep its file system
-/// from being remounted read-only between two outputs.
+/// The output folder and what goes into it, shared with the writer threads.
 #[derive(Debug)]
-struct Journal {
-    path: PathBuf,
-    written: Vec<(PathBuf, u64)>,
+struct Folder {
+    root: PathBuf,
+    spec: OutputSpec,
+    /// Each file written and its size ([`DirWriter::recording`]).
+    written: Option<Mutex<Vec<(PathBuf, u64)>>>,
+}
+
+/// One result for the writer threads to encode and write.
+enum Output {
+    Fields(String, PairFields),
+    Image(String, usize, usize, Vec<u8>),
 }
 
 impl DirWriter {
@@ -581,73 +590,82 @@ impl DirWriter {
             clean_stale_temps(&root.join(sub))?;
         }
         Ok(Self {
-            root: root.to_owned(),
-            spec: spec.clone(),
-            journal: None,
+            folder: Arc::new(Folder {
+                root: root.to_owned(),
+                spec: spec.clone(),
+                written: None,
+            }),
+            background: None,
         })
     }
 
-    /// Name every file in `journal` (created afresh), one path relative to
-    /// the output folder a line, before the file is put in place; and keep
-    /// their sizes for [`Self::written`].
-    pub fn journaled(mut self, journal: &Path) -> Result<Self, HostError> {
-        fs::File::create(journal).map_err(|e| HostError::io(journal, e))?;
-        self.journal = Some(Mutex::new(Journal {
-            path: journal.to_owned(),
-            written: Vec::new(),
-        }));
+    /// Keep the path and size of every file written, for [`Self::written`].
+    /// Before [`Self::in_background`].
+    pub fn recording(mut self) -> Self {
+        Arc::get_mut(&mut self.folder)
+            .expect("recording before in_background")
+            .written = Some(Mutex::new(Vec::new()));
+        self
+    }
+
+    /// Encode and write each result on `threads` threads of its own, so
+    /// that the engine's thread goes on to the next pair meanwhile (each
+    /// file still flushed to disk, then renamed into place). A write's
+    /// failure is returned by a later write or by [`Self::flush`], which
+    /// waits for every result handed over; dropping the writer waits too.
+    pub fn in_background(mut self, threads: usize) -> Result<Self, HostError> {
+        // The crash tests' hook must find no other file being written when
+        // it aborts: one thread there.
+        let threads = if cfg!(feature = "crash-injection") {
+            1
+        } else {
+            threads
+        };
+        let folder = Arc::clone(&self.folder);
+        self.background = Some(Stage::spawn(threads, move |output| match output {
+            Output::Fields(stem, fields) => folder.write_files(&folder.spec.files(&stem, &fields)?),
+            Output::Image(stem, w, h, image) => {
+                folder.write_files(&[folder.spec.image_file(&stem, w, h, &image)?])
+            }
+        })?);
         Ok(self)
     }
 
-    /// Every file written so far with its size in bytes, sorted by path
-    /// (empty unless [`Self::journaled`]).
+    /// Wait until every result handed over is written (nothing to wait for
+    /// unless [`Self::in_background`]); the first failure, if any.
+    pub fn flush(&self) -> Result<(), HostError> {
+        self.background.as_ref().map_or(Ok(()), Stage::flush)
+    }
+
+    /// Every file written so far with its size in bytes, relative to the
+    /// output folder, sorted (empty unless [`Self::recording`]).
     pub fn written(&self) -> Vec<(PathBuf, u64)> {
-        let Some(journal) = &self.journal else {
+        let Some(written) = &self.folder.written else {
             return Vec::new();
         };
-        let mut files = journal
-            .lock()
-            .expect("no panics holding it")
-            .written
-            .clone();
+        let mut files = written.lock().expect("no panics holding it").clone();
         files.sort();
         files
     }
 
-    /// Write `bytes` to the output folder's `rel`, named in the journal first.
-    fn put(&self, rel: &Path, bytes: &[u8]) -> Result<(), HostError> {
-        let path = self.root.join(rel);
-        let Some(journal) = &self.journal else {
-            return atomic::write_file(&path, bytes);
-        };
-        let line = format!("{}\n", rel.display());
-        {
-            let journal = journal.lock().expect("no panics holding it");
-            fs::OpenOptions::new()
-                .append(true)
-                .open(&journal.path)
-                .and_then(|mut file| file.write_all(line.as_bytes()))
-                .map_err(|e| HostError::io(&journal.path, e))?;
-        }
-        atomic::write_file(&path, bytes)?;
-        let mut journal = journal.lock().expect("no panics holding it");
-        journal.written.push((rel.to_owned(), bytes.len() as u64));
-        Ok(())
-    }
-
     /// The output folder.
     pub fn root(&self) -> &Path {
-        &self.root
+        &self.folder.root
     }
 
     /// What is written per result.
     pub fn spec(&self) -> &OutputSpec {
-        &self.spec
+        &self.folder.spec
     }
 
     /// Write every file of the result labelled `stem`.
-    pub fn write(&self, stem: &str, fields: &PairFields) -> Result<(), HostError> {
-        self.write_files(&self.spec.files(stem, fields)?)
+    pub fn write(&self, stem: &str, fields: PairFields) -> Result<(), HostError> {
+        match &self.background {
+            Some(stage) => stage.submit(Output::Fields(stem.to_owned(), fields)),
+            None => self
+                .folder
+                .write_files(&self.folder.spec.files(stem, &fields)?),
+        }
     }
 
     /// Write the result labelled `stem` of a spec that needs no fields
@@ -660,13 +678,51 @@ impl DirWriter {
         height: usize,
         image: &[u8],
     ) -> Result<(), HostError> {
-        debug_assert!(!self.spec.needs_fields(), "{:?}", self.spec);
-        if !self.spec.rep {
+        let spec = &self.folder.spec;
+        debug_assert!(!spec.needs_fields(), "{spec:?}");
+        if !spec.rep {
             return Ok(());
         }
-        self.write_files(&[self.spec.image_file(stem, width, height, image)?])
+        match &self.background {
+            Some(stage) => stage.submit(Output::Image(
+                stem.to_owned(),
+                width,
+                height,
+                image.to_vec(),
+            )),
+            None => self
+                .folder
+                .write_files(&[spec.image_file(stem, width, height, image)?]),
+        }
     }
 
+    /// `--keep-count`: copy every file of the result `from` to the stem `to`.
+    pub fn repeat(&self, from: &str, to: &str) -> Result<(), HostError> {
+        // The files of `from` may still be on their way.
+        self.flush()?;
+        let (root, spec) = (&self.folder.root, &self.folder.spec);
+        let mut dirs: Vec<&str> = Vec::new();
+        if spec.rep {
+            dirs.push("");
+        }
+        dirs.extend(spec.subdirs());
+        for dir in dirs {
+            for ext in ["png", "jpg", "npy", "flo"] {
+                // Named, not `with_extension`: a stem may hold a dot (`img.002`).
+                let src = root.join(dir).join(format!("{from}.{ext}"));
+                if !src.is_file() {
+                    continue;
+                }
+                let bytes = fs::read(&src).map_err(|e| HostError::io(&src, e))?;
+                self.folder
+                    .put(&Path::new(dir).join(format!("{to}.{ext}")), &bytes)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Folder {
     fn write_files(&self, files: &[(PathBuf, Vec<u8>)]) -> Result<(), HostError> {
         #[cfg(feature = "crash-injection")]
         crash_injection::abort_hook(&self.root, files);
@@ -676,23 +732,12 @@ impl DirWriter {
         Ok(())
     }
 
-    /// `--keep-count`: copy every file of the result `from` to the stem `to`.
-    pub fn repeat(&self, from: &str, to: &str) -> Result<(), HostError> {
-        let mut dirs: Vec<&str> = Vec::new();
-        if self.spec.rep {
-            dirs.push("");
-        }
-        dirs.extend(self.spec.subdirs());
-        for dir in dirs {
-            for ext in ["png", "jpg", "npy", "flo"] {
-                // Named, not `with_extension`: a stem may hold a dot (`img.002`).
-                let src = self.root.join(dir).join(format!("{from}.{ext}"));
-                if !src.is_file() {
-                    continue;
-                }
-                let bytes = fs::read(&src).map_err(|e| HostError::io(&src, e))?;
-                self.put(&Path::new(dir).join(format!("{to}.{ext}")), &bytes)?;
-            }
+    /// Write `bytes` to the output folder's `rel`.
+    fn put(&self, rel: &Path, bytes: &[u8]) -> Result<(), HostError> {
+        atomic::write_file(&self.root.join(rel), bytes)?;
+        if let Some(written) = &self.written {
+            let mut written = written.lock().expect("no panics holding it");
+            written.push((rel.to_owned(), bytes.len() as u64));
         }
         Ok(())
     }
