@@ -521,12 +521,14 @@ fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>>
 /// One video or frame folder `src` into the folder `dst`, exactly as
 /// `reynoldsflow dataset` makes each item: the same files, and the marker
 /// .reynoldsflow-done written last, so a finished item is skipped when run
-/// again with the same options (force=True redoes it). Returns the status
+/// again with the same options on the same source with all its files
+/// there (force=True redoes it). Returns the status
 /// record {"path", "output", "status", "frames", "outputs", "seconds",
 /// "error"}, status one of "done", "skipped", "failed"; an input that
 /// cannot be read is a "failed" record (with the reason in "error"), a bad
-/// option raises. npy_dtype, image_format, jpeg_quality, step, fps,
-/// resize and short_side are the command line's flags of the same names
+/// option raises. npy_dtype, image_format, jpeg_quality, jpeg_subsampling,
+/// png_compression, step, fps, resize and short_side are the command
+/// line's flags of the same names
 /// (npy_dtype="f16", image_format="jpg", step=2, fps=10, resize=(W, H),
 /// short_side=N); with step or fps the record also has "source_frames",
 /// the input index of every frame used.

@@ -246,7 +246,10 @@ def convert(
     """One video or frame folder ``src`` into the folder ``dst``, exactly as
     ``reynoldsflow dataset`` makes each item (``reynoldsflow run``'s files
     plus the marker .reynoldsflow-done, written last): a finished item is
-    skipped when run again with the same options; force=True redoes it.
+    skipped when run again with the same options on the same source (size
+    and modification time) with all its files there at their sizes;
+    otherwise it is redone, the files of earlier settings removed first;
+    force=True redoes it.
     npy=True writes v_c, v_d and v_R as .npy (or name them: "v_R" or
     ["v_c", "v_R"]); flo=True writes v_R as .flo. npy_dtype, image_format,
     jpeg_quality, jpeg_subsampling ("444": each pixel's channels kept apart;
