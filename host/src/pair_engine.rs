@@ -11,7 +11,7 @@
 //! keeps them on one thread, [`crate::fixed_engine`]), then, once the
 //! frame's scales are known, its tiles' bytes. Every tiling and thread
 //! count gives the same bytes. The kept magnitudes are what the cues read
-//! ([`Self::magnitudes`], [`crate::cues`]).
+//! ([`PairEngine::magnitudes`], [`crate::cues`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Barrier, Mutex};

@@ -10,7 +10,7 @@
 //!
 //! **Resume.** An item is finished when its output folder holds the marker
 //! `.reynoldsflow-done`, written (atomically) after the item's last output.
-//! It records the settings, the source's stamp ([`source_stamp`]) and every
+//! It records the settings, the source's stamp (size and modification time) and every
 //! output file with its size; a rerun skips items whose marker matches the
 //! current settings and source and whose files are all there at those
 //! sizes, and redoes the rest (`force` redoes everything). A redo first
