@@ -1,15 +1,18 @@
-"""Scores of heatmaps against the drone's centre.
+"""Scores of detections against the drone.
+
+A detector gives scored points (the heatmap network: local maxima over
+7x7 windows, the 5 strongest per frame) or scored boxes (YOLO). Over the
+frames of a test set:
 
 - **located within 3 px**: over frames with a drone, the fraction whose
-  strongest peak is within 3 px of the drone's centre;
-- **AP**: average precision of the detections (local maxima over 7x7
-  windows, the 5 strongest per frame) over all frames, a detection being
-  true when within 3 px of a drone not yet matched in its frame; recall is
-  over the drones (one per drone frame); all-point interpolation;
-- **false positives per drone-free frame at a fixed recall**: the lowest
-  score threshold at which the detections reach that recall over the drone
-  frames, and the detections at or above it on drone-free frames, per
-  drone-free frame (NaN when that recall is never reached).
+  strongest detection (a box by its centre) is within 3 px of the drone's
+  centre;
+- **AP (3 px)**: average precision, a detection being true when within
+  3 px of a drone not yet matched in its frame (strongest first); recall
+  is over the drones (one per drone frame); all-point interpolation;
+- **AP50, AP50-95** (boxes): the same with a true detection's box
+  overlapping the drone's exact box by IoU >= 0.5, and the mean over IoU
+  thresholds 0.50, 0.55, ..., 0.95, as COCO and the paper report them.
 """
 
 from __future__ import annotations
@@ -21,15 +24,6 @@ import numpy as np
 RADIUS = 3.0  # px
 NMS = 7  # px window
 PEAKS = 5  # per frame
-
-
-@dataclass(frozen=True)
-class Scores:
-    located: float  # fraction of drone frames, [0, 1]
-    ap: float  # [0, 1]
-    fp_per_free_frame: float  # at the fixed recall; NaN: recall not reached
-    drone_frames: int
-    free_frames: int
 
 
 def peaks(heat: np.ndarray, k: int = PEAKS, window: int = NMS) -> np.ndarray:
@@ -47,58 +41,6 @@ def peaks(heat: np.ndarray, k: int = PEAKS, window: int = NMS) -> np.ndarray:
     return np.stack([top % w, top // w, s], axis=-1).astype(np.float64)
 
 
-def score(heat: np.ndarray, centers: np.ndarray, recall: float) -> Scores:
-    """Scores of (N, H, W) maps against (N, 2) centres (NaN: drone-free)."""
-    has = np.isfinite(centers[:, 0])
-    n_drone, n_free = int(has.sum()), int((~has).sum())
-    det = peaks(heat)
-    # Located: the strongest peak of each drone frame.
-    d_top = np.hypot(det[:, 0, 0] - centers[:, 0], det[:, 0, 1] - centers[:, 1])
-    located = float(np.mean(d_top[has] <= RADIUS)) if n_drone else float("nan")
-    # Detections, strongest first; true if within RADIUS of its frame's
-    # drone and the drone was not matched by a stronger one.
-    frame = np.repeat(np.arange(len(det)), det.shape[1])
-    flat = det.reshape(-1, 3)
-    keep = np.isfinite(flat[:, 2])
-    frame, flat = frame[keep], flat[keep]
-    order = np.argsort(-flat[:, 2], kind="stable")
-    frame, flat = frame[order], flat[order]
-    dist = np.hypot(flat[:, 0] - centers[frame, 0], flat[:, 1] - centers[frame, 1])
-    close = np.nan_to_num(dist, nan=np.inf) <= RADIUS
-    matched = np.zeros(len(centers), bool)
-    tp = np.zeros(len(flat), bool)
-    for j in np.flatnonzero(close):
-        if not matched[frame[j]]:
-            matched[frame[j]] = tp[j] = True
-    ap = _average_precision(tp, n_drone)
-    fp = _fp_at_recall(tp, flat[:, 2], ~has[frame], n_drone, n_free, recall)
-    return Scores(located, ap, fp, n_drone, n_free)
-
-
-def _average_precision(tp: np.ndarray, positives: int) -> float:
-    if positives == 0:
-        return float("nan")
-    ctp = np.cumsum(tp)
-    precision = ctp / np.arange(1, len(tp) + 1)
-    recall = ctp / positives
-    # All-point interpolation: precision made non-increasing, summed over
-    # the recall steps (where a true detection arrives).
-    precision = np.maximum.accumulate(precision[::-1])[::-1]
-    return float(np.sum(precision[tp]) / positives)
-
-
-def _fp_at_recall(tp, scores, on_free, positives, free_frames, recall) -> float:
-    if positives == 0 or free_frames == 0:
-        return float("nan")
-    reached = np.flatnonzero(np.cumsum(tp) >= recall * positives)
-    if len(reached) == 0:
-        return float("nan")
-    threshold = scores[reached[0]]
-    return float(np.sum(on_free & (scores >= threshold)) / free_frames)
-
-
-# Detections as records, for AP under several criteria and for the
-# bootstrap (stats), which resamples them clip by clip.
 IOU_THRESHOLDS = tuple(round(0.5 + 0.05 * k, 2) for k in range(10))
 POINT_CRITERIA = ("3px",)
 BOX_CRITERIA = ("3px",) + tuple(f"iou{t:.2f}" for t in IOU_THRESHOLDS)
@@ -168,7 +110,8 @@ def records(frame: np.ndarray, score: np.ndarray, where: np.ndarray, centers: np
 
 def ap_of(score: np.ndarray, hits: np.ndarray, positives: int) -> np.ndarray:
     """(K,) AP of (D,) scores and (D, K) hits (any order), all-point
-    interpolation as _average_precision, vectorised over K; NaN without
+    interpolation (precision made non-increasing, summed where a true
+    detection arrives, over the positives), vectorised over K; NaN without
     positives."""
     if positives == 0:
         return np.full(hits.shape[1], np.nan)
