@@ -6,7 +6,9 @@ t + 1, one OpenCV thread): Farneback (``cv2.calcOpticalFlowFarneback``,
 OpenCV's tutorial parameters), DIS (``cv2.DISOpticalFlow``, preset
 MEDIUM) and, from opencv-contrib (``cv2.optflow``, PyPI's
 ``opencv-contrib-python-headless``), TV-L1 (``DualTVL1OpticalFlow``),
-DeepFlow and PCAFlow, each with its defaults.
+DeepFlow and PCAFlow, each with its defaults. A method that raises on a
+pair (PCAFlow does where it finds no feature points to track) gives that
+pair zero flow.
 
 The coding (``hsv``): the HSV colour wheel of OpenCV's optical-flow
 tutorial: hue = the direction of the vector (OpenCV's 0-180 hue for 0-360
@@ -55,7 +57,16 @@ def _method(name: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         "pcaflow": cv2.optflow.createOptFlow_PCAFlow,
     }[name]
     algo = make()
-    return lambda a, b: algo.calc(a, b, None)
+
+    def calc(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        try:
+            return algo.calc(a, b, None)
+        except cv2.error:
+            # PCAFlow tracks feature points first and raises where it finds
+            # none (a featureless sky): no points, no motion found.
+            return np.zeros(a.shape + (2,), np.float32)
+
+    return calc
 
 
 METHODS = ("farneback", "tvl1", "dis", "deepflow", "pcaflow")

@@ -194,7 +194,14 @@ def main(argv=None) -> int:
             futures = {pool.submit(_job, fam, seed, n, a, data_key, scratch): (fam, seed, n) for fam, seed, n in jobs}
             for fut in concurrent.futures.as_completed(futures):
                 fam, seed, name = futures[fut]
-                got, got_recs = fut.result()
+                try:
+                    got, got_recs = fut.result()
+                except BaseException:
+                    # Fail now, not after every queued job has run.
+                    for other in futures:
+                        other.cancel()
+                    print(f"{fam} seed {seed} {name}: failed", file=sys.stderr, flush=True)
+                    raise
                 rows.extend(got)
                 for det, r in got_recs.items():
                     recs[(fam, det, name, seed)] = r
