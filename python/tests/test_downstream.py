@@ -247,6 +247,14 @@ def test_flow_coding_direction_and_normalisation():
     assert rgb[0, 3, 1] == 255 and rgb[0, 3, 2] == 0 and 120 <= rgb[0, 3, 0] <= 135
 
 
+def test_a_flow_method_that_raises_gives_zero_flow():
+    """PCAFlow raises on a featureless pair (no points to track): that pair
+    is coded as no motion, black, instead of ending the run."""
+    flat = np.full((2, 40, 48), 128, np.uint8)
+    img = inputs.BY_NAME["pcaflow"].make(flat)
+    assert img.shape == (1, 40, 48, 3) and not img.any()
+
+
 def test_every_input_is_computed_on_the_same_pairs():
     clip = scenes.make_clip(np.random.default_rng(1), ("clouds",), 4)
     for inp in inputs.INPUTS:
