@@ -121,7 +121,7 @@ def test_quick_report_tables(quick):
     for r in paired:
         assert all(PAIRED.fullmatch(c) for c in r[1:]), r
     # One verdict line per column, naming every baseline once.
-    verdicts = [l for l in text.splitlines() if l.startswith(f"- ") and f"`{inputs.REPRESENTATION}` beats" in l]
+    verdicts = [l for l in text.splitlines() if l.startswith("- ") and f"`{inputs.REPRESENTATION}` beats" in l]
     assert len(verdicts) == 6
     for line in verdicts:
         assert sorted(re.findall(r"`([^`]+)`", line)[1:]) == sorted(BASELINES), line

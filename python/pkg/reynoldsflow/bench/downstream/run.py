@@ -29,7 +29,7 @@ import numpy as np
 
 from . import backgrounds
 from . import inputs as inputs_mod
-from . import metrics, report, scenes, stats
+from . import metrics, report, scenes
 
 FAMILIES = ("sky", "real")
 DETECTORS = ("heatmap", "yolo")
