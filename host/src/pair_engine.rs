@@ -296,9 +296,9 @@ impl Shared<'_, '_> {
     }
 
     /// One thread's part: tiles until none is left, then (once every tile
-    /// is computed, the scales need them all) their bytes. A thread that
-    /// starts late finds the others have taken every tile: nobody waits
-    /// for a thread that has nothing to do.
+    /// is computed, the scales need them all) their bytes. The others
+    /// wait for the tiles, not for the threads: one that starts late
+    /// finds every tile taken and only leaves.
     fn work(&self, memory: &mut HostEngine) {
         let computed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             let next = || {
