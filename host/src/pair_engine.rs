@@ -14,7 +14,7 @@
 //! ([`PairEngine::magnitudes`], [`crate::cues`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Barrier, Mutex};
+use std::sync::{Condvar, Mutex};
 
 use reynoldsflow_core::{ExtremesSink, FlowPixel, HALO, Params, Pixels, Plan, Scaling, Sink};
 
@@ -198,8 +198,8 @@ impl PairEngine {
             tiles: &tiles,
             computed: AtomicUsize::new(0),
             converted: AtomicUsize::new(0),
-            done: Barrier::new(threads.min(tiles.len()).max(1)),
-            failed: Mutex::new(None),
+            progress: Mutex::new(Progress::default()),
+            finished: Condvar::new(),
         };
         let helpers = &mut self.helpers[..threads.min(tiles.len()).max(1) - 1];
         std::thread::scope(|scope| {
@@ -209,11 +209,8 @@ impl PairEngine {
             }
             shared.work(memory);
         });
-        if let Some(e) = shared
-            .failed
-            .into_inner()
-            .expect("no panic while holding it")
-        {
+        let progress = shared.progress.into_inner();
+        if let Some(e) = progress.expect("no panic while holding it").failed {
             return Err(e);
         }
         if self.keep {
@@ -275,25 +272,43 @@ struct Shared<'a, 'p> {
     /// The next tile to compute, then to convert.
     computed: AtomicUsize,
     converted: AtomicUsize,
-    /// Every tile is computed (the scales need all of them).
-    done: Barrier,
+    progress: Mutex<Progress>,
+    /// Signalled when every tile is computed, or one failed.
+    finished: Condvar,
+}
+
+/// How far the tiles' computation is.
+#[derive(Default)]
+struct Progress {
+    /// Tiles computed.
+    computed: usize,
     /// The first failure.
-    failed: Mutex<Option<HostError>>,
+    failed: Option<HostError>,
 }
 
 impl Shared<'_, '_> {
-    /// One thread's part: tiles until none is left, then (once every
-    /// thread is done) their bytes.
+    fn lock(&self) -> std::sync::MutexGuard<'_, Progress> {
+        self.progress.lock().expect("no panic while holding it")
+    }
+
+    /// One thread's part: tiles until none is left, then (once every tile
+    /// is computed, the scales need them all) their bytes. The others
+    /// wait for the tiles, not for the threads: one that starts late
+    /// finds every tile taken and only leaves.
     fn work(&self, memory: &mut HostEngine) {
-        // A panic must not leave the other threads at the barrier.
         let computed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let next = || {
+                Some(self.computed.fetch_add(1, Ordering::Relaxed))
+                    .filter(|&index| index < self.tiles.len())
+            };
+            let Some(mut index) = next() else {
+                return Ok(());
+            };
             let mut engine = memory.engine(self.plan)?;
             loop {
-                let index = self.computed.fetch_add(1, Ordering::Relaxed);
-                let Some(tile) = self.tiles.get(index) else {
-                    return Ok(());
-                };
-                let mut tile = tile.lock().expect("each tile is taken once at a time");
+                let mut tile = self.tiles[index]
+                    .lock()
+                    .expect("each tile is taken once at a time");
                 let pass = Pass::Tile(index);
                 dispatch::run(
                     self.isa,
@@ -303,6 +318,17 @@ impl Shared<'_, '_> {
                     pass,
                     &mut *tile,
                 )?;
+                drop(tile);
+                let mut progress = self.lock();
+                progress.computed += 1;
+                if progress.computed == self.tiles.len() {
+                    self.finished.notify_all();
+                }
+                drop(progress);
+                match next() {
+                    Some(i) => index = i,
+                    None => return Ok(()),
+                }
             }
         }))
         .unwrap_or_else(|_| {
@@ -311,21 +337,22 @@ impl Shared<'_, '_> {
                 "internal error (panic) while computing a tile",
             ))
         });
+        let mut progress = self.lock();
         if let Err(e) = computed {
-            self.failed
-                .lock()
-                .expect("no panic while holding it")
-                .get_or_insert(e);
+            // Nobody waits for the tiles of a failed pair.
+            progress.failed.get_or_insert(e);
+            self.finished.notify_all();
         }
-        self.done.wait();
-        if self
-            .failed
-            .lock()
-            .expect("no panic while holding it")
-            .is_some()
-        {
+        while progress.computed < self.tiles.len() && progress.failed.is_none() {
+            progress = self
+                .finished
+                .wait(progress)
+                .expect("no panic while holding it");
+        }
+        if progress.failed.is_some() {
             return;
         }
+        drop(progress);
         let scales = {
             let merged = || {
                 let mut extremes = ExtremesSink::default();
