@@ -20,24 +20,31 @@ DEFAULT_MEMORY_BUDGET = 1 << 30
 Fields = Dict[str, torch.Tensor]
 
 
-def _frames(name: str, t: Any) -> torch.Tensor:
-    """``t`` as ``(B, H, W)`` uint8 (a view), or the error naming it."""
+def gray_frames(t: Any, who: str, axis: str) -> torch.Tensor:
+    """``t`` as ``(N, H, W)`` uint8 frames (a view of ``(N, 1, H, W)``), or
+    the ``TypeError`` / ``ValueError`` that starts with ``who`` (the
+    function and argument); ``axis`` names the first axis (``B``, ``T``)."""
     if not isinstance(t, torch.Tensor):
-        raise TypeError(f"represent_batch: {name}: expected a torch.Tensor, got {type(t).__name__}")
+        raise TypeError(f"{who}: expected a torch.Tensor, got {type(t).__name__}")
     if t.dtype != torch.uint8:
-        raise TypeError(f"represent_batch: {name}: expected uint8 frames, got {t.dtype}")
+        raise TypeError(f"{who}: expected uint8 frames, got {t.dtype}")
     if t.dim() == 4:
         if t.shape[1] != 1:
             raise ValueError(
-                f"represent_batch: {name}: a 4-D batch must be (B, 1, H, W) (one gray channel); "
+                f"{who}: 4-D frames must be ({axis}, 1, H, W) (one gray channel); "
                 f"got shape {tuple(t.shape)}"
             )
-        t = t[:, 0]
-    elif t.dim() != 3:
+        return t[:, 0]
+    if t.dim() != 3:
         raise TypeError(
-            f"represent_batch: {name}: expected (B, H, W) or (B, 1, H, W) frames, "
-            f"got {t.dim()} dimensions"
+            f"{who}: expected ({axis}, H, W) or ({axis}, 1, H, W) frames, got {t.dim()} dimensions"
         )
+    return t
+
+
+def _frames(name: str, t: Any) -> torch.Tensor:
+    """``t`` as ``(B, H, W)`` uint8 (a view), or the error naming it."""
+    t = gray_frames(t, f"represent_batch: {name}", "B")
     h, w = t.shape[1:]
     if not (1 <= h <= MAX_SIDE and 1 <= w <= MAX_SIDE):
         raise ValueError(

@@ -36,7 +36,7 @@ import numpy
 
 import reynoldsflow as _rf
 from reynoldsflow._core_params import SETTING_KEYS as _SETTING_KEYS, core_constants as _core_constants
-from reynoldsflow._torch_batch import represent_batch
+from reynoldsflow._torch_batch import gray_frames, represent_batch
 
 __all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "collate", "represent_batch", "shard_of_this_process"]
 
@@ -109,21 +109,7 @@ class ReynoldsFlow:
         return {k: v for k, v in self.options.items() if k != "keep_count"}
 
     def __call__(self, frames: "torch.Tensor") -> "torch.Tensor":
-        if not isinstance(frames, torch.Tensor):
-            raise TypeError(f"ReynoldsFlow: expected a torch.Tensor, got {type(frames).__name__}")
-        if frames.dim() == 4:
-            if frames.shape[1] != 1:
-                raise ValueError(
-                    f"ReynoldsFlow: a 4-D clip must be (T, 1, H, W) (one gray channel); "
-                    f"got shape {tuple(frames.shape)}"
-                )
-            frames = frames[:, 0]
-        elif frames.dim() != 3:
-            raise TypeError(
-                f"ReynoldsFlow: expected a (T, H, W) or (T, 1, H, W) clip, got {frames.dim()} dimensions"
-            )
-        if frames.dtype != torch.uint8:
-            raise TypeError(f"ReynoldsFlow: expected a uint8 clip, got {frames.dtype}")
+        frames = gray_frames(frames, "ReynoldsFlow", "T")
         if self.device is not None:
             return self._on_device(frames.to(self.device))
         reps = _rf.represent_clip(
