@@ -18,7 +18,7 @@ use reynoldsflow_host::outputs::{
     NpyDtype, OutputSpec, PngCompression, StreamFormat, Variant,
 };
 use reynoldsflow_host::pipeline::{self, Compute, Destination, Options, Summary};
-use reynoldsflow_host::sequence::sampled::{self, FramePlan, FrameSize, Rate, Sampling};
+use reynoldsflow_host::sequence::sampled::{self, FramePlan, FrameSize, Rate};
 use reynoldsflow_host::sequence::{self, FrameSource, InputSpec};
 use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize};
 
@@ -217,14 +217,7 @@ pub struct FrameArgs {
 impl FrameArgs {
     /// The plan these flags make.
     pub fn plan(&self) -> FramePlan {
-        FramePlan {
-            sampling: match (self.step, self.fps) {
-                (Some(k), _) => Sampling::Step(k),
-                (None, Some(rate)) => Sampling::Fps(rate),
-                (None, None) => Sampling::Every,
-            },
-            size: self.resize.or(self.short_side),
-        }
+        FramePlan::new(self.step, self.fps, self.resize.or(self.short_side))
     }
 }
 

@@ -295,6 +295,13 @@ impl Settings {
                 format!("{k}; expected a positive number of pixels"),
             ));
         }
+        // Both engines: the float reference would refuse it only per pair.
+        if !(self.lambda.is_finite() && self.lambda > 0.0) {
+            return Err(HostError::setting(
+                Setting::Lambda,
+                format!("{}; expected a positive number (e.g. 1e-4)", self.lambda),
+            ));
+        }
         if self.threads == Some(0) {
             return Err(HostError::setting(
                 Setting::Threads,
@@ -537,6 +544,46 @@ mod tests {
         assert_eq!(parse_lambda("1e-4"), Ok(1e-4));
         for bad in ["0", "-1e-4", "nan", "inf", "x"] {
             assert!(parse_lambda(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn settings_are_checked_once_for_both_engines() {
+        for engine in [EngineKind::Fixed, EngineKind::Float] {
+            for lambda in [0.0, -1e-4, f64::NAN] {
+                let bad = Settings {
+                    engine,
+                    lambda,
+                    ..Settings::default()
+                };
+                assert!(matches!(
+                    bad.compute(),
+                    Err(HostError::Setting {
+                        setting: Setting::Lambda,
+                        ..
+                    })
+                ));
+            }
+            let bad = Settings {
+                engine,
+                hsv_max: Some(0.0),
+                ..Settings::default()
+            };
+            assert!(matches!(
+                bad.compute(),
+                Err(HostError::Setting {
+                    setting: Setting::HsvMax,
+                    ..
+                })
+            ));
+            assert!(
+                Settings {
+                    engine,
+                    ..Settings::default()
+                }
+                .compute()
+                .is_ok()
+            );
         }
     }
 }

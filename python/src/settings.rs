@@ -14,7 +14,7 @@ use reynoldsflow_host::outputs::{
     PngCompression, Variant,
 };
 use reynoldsflow_host::pipeline::Compute;
-use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate, Sampling};
+use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate};
 use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize, parse_choice};
 
 use crate::errors::{host_error, value_error};
@@ -164,14 +164,7 @@ impl<'py> Kwargs<'py> {
                 "{function}(): give step or fps, not both"
             )));
         }
-        Ok(FramePlan {
-            sampling: match (step, fps) {
-                (Some(k), _) => Sampling::Step(k),
-                (None, Some(rate)) => Sampling::Fps(rate),
-                (None, None) => Sampling::Every,
-            },
-            size: resize.or(short_side),
-        })
+        Ok(FramePlan::new(step, fps, resize.or(short_side)))
     }
 
     /// No keyword may be left (for functions without [`Settings`]).
@@ -426,11 +419,6 @@ impl CallSettings {
                 parse_intensity_scale(&v)
             })?;
         let lambda = kw.get::<f64>("lam")?.unwrap_or(settings::DEFAULT_LAMBDA);
-        if !(lambda.is_finite() && lambda > 0.0) {
-            return Err(value_error(format!(
-                "lam = {lambda}; expected a positive number (e.g. 1e-4)"
-            )));
-        }
         let tile = kw
             .get::<(usize, usize)>("tile")?
             .map(|(width, height)| {
@@ -445,10 +433,8 @@ impl CallSettings {
             Some(name) => choice::<Variant>("variant", &name)?,
             None => settings::DEFAULT_VARIANT,
         };
+        // Checked with the rest by `Settings::compute` below.
         let hsv_max = kw.get::<f64>("hsv_max")?;
-        if hsv_max.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
-            return Err(value_error("hsv_max: expected a positive number of pixels"));
-        }
         let layout = match kw.get::<String>("layout")?.as_deref() {
             None | Some("hwc") => Layout::Hwc,
             Some("chw") => Layout::Chw,

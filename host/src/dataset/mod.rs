@@ -43,7 +43,7 @@ use crate::pipeline::{self, Compute, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
 use crate::sequence::sampled::FramePlan;
 use crate::sequence::{self, FrameSource, InputSpec, input_error};
-use crate::settings::{ScaleArg, Setting, Settings};
+use crate::settings::{Setting, Settings};
 use crate::{HostError, atomic};
 
 pub mod shard;
@@ -82,16 +82,12 @@ impl ItemSettings {
     /// The settings as WebDataset samples record them (`KEY.json`).
     pub fn describe(&self) -> serde_json::Value {
         let (c, spec) = (&self.settings, &self.spec);
-        let scale = match c.scale {
-            ScaleArg::MinMax => "minmax".to_owned(),
-            ScaleArg::Fixed { k_d, k_c } => format!("fixed:{k_d},{k_c}"),
-        };
         let names = |fields: &[crate::outputs::Field]| -> Vec<&str> {
             fields.iter().map(|f| f.name()).collect()
         };
         json!({
             "engine": c.engine.name(),
-            "scale": scale,
+            "scale": c.scale.to_string(),
             "intensity_scale": format!("{}/{}", c.intensity_scale.num(), c.intensity_scale.den()),
             "lambda": c.lambda,
             "tile": c.tile.map(|t| format!("{}x{}", t.width, t.height)),

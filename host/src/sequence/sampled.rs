@@ -138,6 +138,20 @@ pub struct FramePlan {
 }
 
 impl FramePlan {
+    /// The plan of every front end's step / fps / size settings: every
+    /// K-th frame if `step` is set, else `fps` frames per second if set,
+    /// else every frame (front ends refuse both at once).
+    pub fn new(step: Option<u64>, fps: Option<Rate>, size: Option<FrameSize>) -> Self {
+        Self {
+            sampling: match (step, fps) {
+                (Some(k), _) => Sampling::Step(k),
+                (None, Some(rate)) => Sampling::Fps(rate),
+                (None, None) => Sampling::Every,
+            },
+            size,
+        }
+    }
+
     /// Every frame at its own size: the input as it is.
     pub fn is_identity(&self) -> bool {
         self.sampling == Sampling::Every && self.size.is_none()
