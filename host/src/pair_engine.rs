@@ -19,7 +19,7 @@ use std::sync::{Condvar, Mutex};
 use reynoldsflow_core::{ExtremesSink, FlowPixel, HALO, Params, Pixels, Plan, Scaling, Sink};
 
 use crate::dispatch::{self, Isa, Pass};
-use crate::fixed_engine::{self, FrameEngine, HostEngine, MAX_STRIP_WIDTH, prepare};
+use crate::fixed_engine::{self, FrameEngine, HostEngine, prepare};
 use crate::outputs::{OutputSpec, PairFields};
 use crate::page_buffer::ByteBuffer;
 use crate::pipeline::Compute;
@@ -38,6 +38,9 @@ pub struct PairEngine {
     engine: FrameEngine,
     /// The other threads' engine memory.
     helpers: Vec<HostEngine>,
+    /// The other threads, kept from pair to pair (none on one thread):
+    /// starting them for each pair cost more than waking them.
+    pool: Option<rayon::ThreadPool>,
     /// The size of the last pair whose magnitudes are kept.
     kept: Option<(usize, usize)>,
     /// The colour wheel's pixels (it reads the fields).
@@ -67,6 +70,18 @@ impl PairEngine {
     pub fn new(settings: &Settings) -> Result<Self, HostError> {
         let compute = settings.compute()?;
         let threads = settings.threads().max(1);
+        let pool = match threads {
+            1 => None,
+            n => Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n - 1)
+                    .thread_name(|i| format!("reynoldsflow-pair-{i}"))
+                    .build()
+                    .map_err(|e| {
+                        HostError::invalid("threads", format!("cannot start {n} threads: {e}"))
+                    })?,
+            ),
+        };
         Ok(Self {
             compute,
             spec: OutputSpec {
@@ -78,6 +93,7 @@ impl PairEngine {
             keep: false,
             engine: FrameEngine::new(),
             helpers: (1..threads).map(|_| HostEngine::new()).collect(),
+            pool,
             kept: None,
             pixels: Vec::new(),
             luma: Vec::new(),
@@ -202,13 +218,17 @@ impl PairEngine {
             finished: Condvar::new(),
         };
         let helpers = &mut self.helpers[..threads.min(tiles.len()).max(1) - 1];
-        std::thread::scope(|scope| {
-            for memory in helpers.iter_mut() {
-                let shared = &shared;
-                scope.spawn(move || shared.work(memory));
-            }
-            shared.work(memory);
-        });
+        match &self.pool {
+            // This thread takes tiles too; the pool's threads join it.
+            Some(pool) if !helpers.is_empty() => pool.in_place_scope(|scope| {
+                for memory in helpers.iter_mut() {
+                    let shared = &shared;
+                    scope.spawn(move |_| shared.work(memory));
+                }
+                shared.work(memory);
+            }),
+            _ => shared.work(memory),
+        }
         let progress = shared.progress.into_inner();
         if let Some(e) = progress.expect("no panic while holding it").failed {
             return Err(e);
@@ -514,30 +534,25 @@ impl ByteBuffer for Exact<'_> {
     }
 }
 
-/// Tile size for `threads`: the host's widest strip, or narrower ones, in
-/// as many rows of tiles as gives the shortest pass, counting each tile's
-/// halo (`HALO` px on every side) and `⌈tiles / threads⌉` rounds. One
-/// thread: the host's full-height strips.
+/// Tile size for `threads`: the host's full-width strips (one thread's
+/// strips, at most [`fixed_engine::MAX_STRIP_WIDTH`] wide) cut into as many bands as
+/// gives the shortest pass, counting each band's halo (`HALO` rows above
+/// and below) and `⌈tiles / threads⌉` rounds. Bands, not columns: a
+/// tile's cost grows with its rows (each row is a step of the engine's
+/// row rings), and bands keep each tile's planes and image rows whole.
 fn balanced_tile(width: usize, height: usize, threads: usize) -> (usize, usize) {
-    let min_across = width.div_ceil(MAX_STRIP_WIDTH).max(1);
-    let mut best = (
-        usize::MAX,
-        (fixed_engine::strip_width(width), height.max(1)),
-    );
-    if threads <= 1 {
-        return best.1;
-    }
-    for across in min_across..=min_across + threads {
-        for down in 1..=(2 * threads).min(height) {
-            let (tw, th) = (width.div_ceil(across), height.div_ceil(down));
-            let tiles = width.div_ceil(tw) * height.div_ceil(th);
-            let cost = tiles.div_ceil(threads) * (tw + 2 * HALO) * (th + 2 * HALO);
-            if cost < best.0 {
-                best = (cost, (tw, th));
-            }
+    let strip = fixed_engine::strip_width(width);
+    let across = width.div_ceil(strip);
+    let mut best = (usize::MAX, height.max(1));
+    for down in 1..=(2 * threads).min(height).max(1) {
+        let band = height.div_ceil(down);
+        let tiles = across * height.div_ceil(band);
+        let cost = tiles.div_ceil(threads) * (band + 2 * HALO);
+        if cost < best.0 {
+            best = (cost, band);
         }
     }
-    best.1
+    (strip, best.1)
 }
 
 #[cfg(test)]
