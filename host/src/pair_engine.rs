@@ -155,6 +155,20 @@ impl PairEngine {
         self.tiles(prev, next, params, scaling, rgb)
     }
 
+    /// The fields of the pair `(prev, next)` (and the float engine's
+    /// representation), for a consumer that reads them: the vector fields,
+    /// the motion score. One thread.
+    pub fn fields(&mut self, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
+        self.kept = None;
+        self.compute.pair_with(&mut self.engine, prev, next)
+    }
+
+    /// The image of `fields` (from [`Self::fields`]): the bytes
+    /// [`Self::image`] writes for the same pair.
+    pub fn image_of(&self, fields: &PairFields) -> Vec<u8> {
+        self.spec.image(fields)
+    }
+
     /// [`Self::image`] into a new buffer.
     pub fn image_vec(&mut self, prev: &Gray, next: &Gray) -> Result<Vec<u8>, HostError> {
         let mut rgb = vec![0; 3 * prev.pixels.len()];

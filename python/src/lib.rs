@@ -17,10 +17,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use reynoldsflow_host::dataset::{self, Record, Shard};
-use reynoldsflow_host::fixed_engine::FrameEngine;
-use reynoldsflow_host::outputs::{OutputSpec, PairFields, flo};
-use reynoldsflow_host::page_buffer::ByteBuffer;
-use reynoldsflow_host::pipeline::Compute;
+use reynoldsflow_host::outputs::flo;
+use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::pair_stream::{self, PairStream};
+use reynoldsflow_host::settings::FirstFrame;
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
 use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic, workers};
@@ -40,59 +40,61 @@ fn mean_speed(planes: &FlowPlanes) -> f64 {
     planes.mean_speed()
 }
 
-/// One thread's reused memory for pairs: the engine's, and the
-/// interleaved image a channels-first result is split from.
-#[derive(Default)]
+/// One thread's pair engine (the host's, on one thread: its memory kept
+/// from pair to pair), and the interleaved image a channels-first result
+/// is split from.
 struct PairWorker {
-    engine: FrameEngine,
+    engine: PairEngine,
     rgb: Vec<u8>,
 }
 
-/// The bytes of one pair's image written in place: a slice of the result
-/// array, exactly the image's length (the caller's shape check).
-struct Slot<'a>(&'a mut [u8]);
+impl PairWorker {
+    /// A worker of `settings`, on `threads` threads.
+    fn new(settings: &CallSettings, threads: usize) -> Result<Self, HostError> {
+        Ok(Self {
+            engine: settings.pair_engine(threads)?,
+            rgb: Vec::new(),
+        })
+    }
 
-impl ByteBuffer for Slot<'_> {
-    fn overwrite(&mut self, len: usize) -> Result<&mut [u8], HostError> {
-        if len != self.0.len() {
-            let why = format!("{} bytes for an image of {len}", self.0.len());
-            return Err(HostError::invalid("out", why));
+    /// The worker in `slot`, made there on first use.
+    fn of<'a>(
+        slot: &'a mut Option<Self>,
+        settings: &CallSettings,
+    ) -> Result<&'a mut Self, HostError> {
+        if slot.is_none() {
+            *slot = Some(Self::new(settings, 1)?);
         }
-        Ok(self.0)
+        Ok(slot.as_mut().expect("made above"))
     }
-}
 
-/// The `--variant` image of one pair written into `out` (its `3·H·W`
-/// bytes) in `layout`; the pair's motion score when `score` is asked
-/// (which needs the fields), else 0. Without the fields, as `run` computes
-/// images only, an (H, W, 3) image is written straight into `out`, a
-/// channels-first one split into it from the worker's reused buffer.
-fn pair_into(
-    compute: &Compute,
-    spec: &OutputSpec,
-    worker: &mut PairWorker,
-    (prev, next): (&Gray, &Gray),
-    layout: Layout,
-    score: bool,
-    out: &mut [u8],
-) -> Result<f64, HostError> {
-    if score || spec.image_needs_fields() {
-        let fields = compute.pair_with(&mut worker.engine, prev, next)?;
-        layout.place(&spec.image(&fields), out);
-        return Ok(mean_speed(&fields.planes));
-    }
-    match layout {
-        Layout::Hwc => {
-            compute.representation(&mut worker.engine, prev, next, &mut Slot(&mut *out))?;
-            spec.arrange(out);
+    /// The image of one pair written into `out` (its `3·H·W` bytes) in
+    /// `layout`; the pair's motion score when `score` is asked (which
+    /// needs the fields), else 0. Without the fields, an (H, W, 3) image
+    /// is written straight into `out`, a channels-first one split into it
+    /// from the worker's reused buffer.
+    fn pair_into(
+        &mut self,
+        (prev, next): (&Gray, &Gray),
+        layout: Layout,
+        score: bool,
+        out: &mut [u8],
+    ) -> Result<f64, HostError> {
+        if score {
+            let fields = self.engine.fields(prev, next)?;
+            layout.place(&self.engine.image_of(&fields), out);
+            return Ok(mean_speed(&fields.planes));
         }
-        Layout::Chw => {
-            compute.representation(&mut worker.engine, prev, next, &mut worker.rgb)?;
-            spec.arrange(&mut worker.rgb);
-            layout.place(&worker.rgb, out);
+        match layout {
+            Layout::Hwc => self.engine.image(prev, next, out)?,
+            Layout::Chw => {
+                self.rgb.resize(out.len(), 0);
+                self.engine.image(prev, next, &mut self.rgb)?;
+                layout.place(&self.rgb, out);
+            }
         }
+        Ok(0.0)
     }
-    Ok(0.0)
 }
 
 /// An array of `shape` owning `data` (no copy).
@@ -120,16 +122,17 @@ fn pair_frames<'py>(
     Ok((p, n))
 }
 
-/// The fields and representation of `(prev, next)`, computed without the GIL.
-fn compute_pair(
+/// `work` on the pair `(prev, next)` with a one-thread worker of
+/// `settings`, without the GIL.
+fn on_pair<T: Send>(
     py: Python<'_>,
     settings: &CallSettings,
-    prev: &Frames<'_>,
-    next: &Frames<'_>,
-) -> PyResult<PairFields> {
-    let compute = settings.compute()?;
+    (prev, next): (&Frames<'_>, &Frames<'_>),
+    work: impl FnOnce(&mut PairWorker, &Gray, &Gray) -> Result<T, HostError> + Send,
+) -> PyResult<T> {
+    let mut worker = PairWorker::new(settings, 1).map_err(host_error)?;
     let (pv, nv) = (prev.view(), next.view());
-    py.detach(|| guarded(|| compute.pair(&gray(pv)?, &gray(nv)?)))
+    py.detach(|| guarded(|| work(&mut worker, &gray(pv)?, &gray(nv)?)))
         .map_err(Failure::into_pyerr)
 }
 
@@ -152,10 +155,12 @@ fn represent<'py>(
         CallSettings::parse(Kwargs::new(py, "represent", options, settings::IMAGE_KEYS)?)?;
     let (p, n) = pair_frames(prev, next)?;
     let (h, w) = p.frame_shape();
-    let fields = compute_pair(py, &settings, &p, &n)?;
-    let spec = settings.output_spec();
     let layout = settings.layout();
-    let image = py.detach(|| settings::arrange(spec.image(&fields), layout));
+    let image = on_pair(py, &settings, (&p, &n), |worker, prev, next| {
+        let mut image = vec![0; 3 * h * w];
+        worker.pair_into((prev, next), layout, false, &mut image)?;
+        Ok(image)
+    })?;
     array(py, image, &layout.shape(None, h, w))
 }
 
@@ -177,7 +182,9 @@ fn fields<'py>(
     let settings = CallSettings::parse(Kwargs::new(py, "fields", options, &[])?)?;
     let (p, n) = pair_frames(prev, next)?;
     let (h, w) = p.frame_shape();
-    let planes = compute_pair(py, &settings, &p, &n)?.planes;
+    let planes = on_pair(py, &settings, (&p, &n), |worker, prev, next| {
+        Ok(worker.engine.fields(prev, next)?.planes)
+    })?;
     let out = PyDict::new(py);
     let v_r = planes.v_r();
     for (name, field) in [("v_c", &planes.v_c), ("v_d", &planes.v_d), ("v_R", &v_r)] {
@@ -210,8 +217,9 @@ fn motion_score<'py>(
 ) -> PyResult<f64> {
     let settings = CallSettings::parse(Kwargs::new(py, "motion_score", options, &[])?)?;
     let (p, n) = pair_frames(prev, next)?;
-    let fields = compute_pair(py, &settings, &p, &n)?;
-    Ok(py.detach(|| mean_speed(&fields.planes)))
+    on_pair(py, &settings, (&p, &n), |worker, prev, next| {
+        Ok(mean_speed(&worker.engine.fields(prev, next)?.planes))
+    })
 }
 
 /// represent_clip(frames, *, keep_count=False, threads=None,
@@ -268,8 +276,6 @@ fn represent_clip<'py>(
     let source_fps = kw.rate("source_fps")?;
     let out = kw.object("out")?;
     let settings = CallSettings::parse(kw)?;
-    let compute = settings.compute()?;
-    let spec = settings.output_spec();
     let layout = settings.layout();
     let clip = Frames::clip(frames, "frames")?;
     let (t, (h, w)) = (clip.count(), clip.frame_shape());
@@ -313,20 +319,12 @@ fn represent_clip<'py>(
                     .chunks_exact_mut(frame_bytes)
                     .map(Mutex::new)
                     .collect();
-                let scores =
-                    workers::map_indices(threads, results, PairWorker::default, |worker, i| {
-                        let pair = (&grays[i], &grays[i + 1]);
-                        let mut slot = slots[i].lock().expect("one thread takes each pair");
-                        pair_into(
-                            &compute,
-                            &spec,
-                            worker,
-                            pair,
-                            layout,
-                            return_scores,
-                            &mut slot,
-                        )
-                    })
+                let scores = workers::map_indices(threads, results, || None, |worker, i| {
+                    let worker = PairWorker::of(worker, &settings)?;
+                    let pair = (&grays[i], &grays[i + 1]);
+                    let mut slot = slots[i].lock().expect("one thread takes each pair");
+                    worker.pair_into(pair, layout, return_scores, &mut slot)
+                })
                     .into_iter()
                     .collect::<Result<Vec<f64>, HostError>>()?;
                 drop(slots);
@@ -362,25 +360,106 @@ fn sized(frame: Gray, plan: &FramePlan) -> Result<Gray, HostError> {
     }
 }
 
-/// Stream(width, height, *, engine="fixed", scale="minmax", ...)
+/// Stream(width, height, *, first_frame="drop", threads=None,
+/// engine="fixed", scale="minmax", ...)
 ///
-/// Frames pushed one at a time (a camera, a decoder): push(frame) returns
-/// None for the first frame, then the representation of (previous frame,
-/// this frame), the same bytes as represent. Frames are (height, width) or
-/// (height, width, 1) uint8 arrays.
+/// Frames pushed one at a time (a camera, a decoder), paired as the
+/// GStreamer element and the ROS 2 node pair them: each frame with the one
+/// before, every result the same bytes as represent(previous, this).
+/// Frames are (height, width) or (height, width, 1) uint8 arrays.
+///
+/// first_frame says what the first frame (which has no pair of its own)
+/// gives: "drop" (the default) nothing, so N frames give N - 1 images;
+/// "black" an all-zero image; "repeat" a copy of the first pair's image,
+/// given with it at the second frame (a stream of one frame gives, at
+/// end(), that frame paired with itself). push() returns at most one image
+/// per frame, so "repeat" takes feed() and end(), which return lists.
+/// Each pair is computed on `threads` threads (default every core; the
+/// bytes do not depend on it).
 ///
 /// A Stream holds its previous frame: use each one from one thread at a
-/// time (one per camera); a push from a second thread while another runs
+/// time (one per camera); a call from a second thread while another runs
 /// raises RuntimeError ("Already borrowed"). A frame that another thread
-/// changes during push (which releases the GIL) gives undefined bytes.
+/// changes during a call (which releases the GIL) gives undefined bytes.
 #[pyclass(module = "reynoldsflow")]
 struct Stream {
     width: usize,
     height: usize,
-    settings: CallSettings,
-    prev: Option<Gray>,
-    /// Reused from pair to pair.
-    worker: Mutex<PairWorker>,
+    layout: Layout,
+    first_frame: FirstFrame,
+    /// The pairing, then the engine.
+    pairs: PairStream<()>,
+    worker: PairWorker,
+}
+
+impl Stream {
+    /// Check `frame`'s shape; its luma, without the GIL held by `work`.
+    fn take<'py, T: Send>(
+        &mut self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+        work: impl FnOnce(&mut PairStream<()>, &mut PairWorker, Gray) -> Result<T, HostError> + Send,
+    ) -> PyResult<T> {
+        let f = Frames::single(frame, "frame")?;
+        if f.frame_shape() != (self.height, self.width) {
+            return Err(value_error(format!(
+                "frame has shape {:?}; this Stream takes (height, width) = ({}, {})",
+                f.frame_shape(),
+                self.height,
+                self.width
+            )));
+        }
+        let view = f.view();
+        let (pairs, worker) = (&mut self.pairs, &mut self.worker);
+        py.detach(|| guarded(|| work(pairs, worker, gray(view)?)))
+            .map_err(Failure::into_pyerr)
+    }
+
+    /// The images of `outputs`, in order, as arrays.
+    fn arrays<'py>(
+        &self,
+        py: Python<'py>,
+        outputs: impl IntoIterator<Item = pair_stream::Output<Vec<u8>, ()>>,
+    ) -> PyResult<Vec<Bound<'py, PyArrayDyn<u8>>>> {
+        let shape = self.layout.shape(None, self.height, self.width);
+        let mut arrays = Vec::new();
+        for output in outputs {
+            match output {
+                pair_stream::Output::Black { width, height, .. } => {
+                    arrays.push(array(py, vec![0; 3 * width * height], &shape)?);
+                }
+                pair_stream::Output::Result { result, labels } => {
+                    for _ in 1..labels.len() {
+                        arrays.push(array(py, result.clone(), &shape)?);
+                    }
+                    arrays.push(array(py, result, &shape)?);
+                }
+            }
+        }
+        Ok(arrays)
+    }
+
+    /// The image of `(prev, next)` in a new buffer.
+    fn image(
+        worker: &mut PairWorker,
+        layout: Layout,
+    ) -> impl FnMut(&Gray, &Gray) -> Result<Vec<u8>, HostError> {
+        move |prev, next| {
+            let mut image = vec![0; 3 * prev.pixels.len()];
+            worker.pair_into((prev, next), layout, false, &mut image)?;
+            Ok(image)
+        }
+    }
+}
+
+/// A frame as the pair stream takes it: no stamp, no label.
+fn stream_frame(gray: Gray) -> pair_stream::Frame<()> {
+    pair_stream::Frame {
+        gray,
+        encoding: "GRAY8",
+        stamp: None,
+        label: (),
+    }
 }
 
 #[pymethods]
@@ -393,9 +472,11 @@ impl Stream {
         height: usize,
         options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let settings =
-            CallSettings::parse(Kwargs::new(py, "Stream", options, settings::IMAGE_KEYS)?)?;
-        settings.compute()?;
+        let keys = [settings::IMAGE_KEYS, &["first_frame", "threads"]].concat();
+        let mut kw = Kwargs::new(py, "Stream", options, &keys)?;
+        let first_frame = kw.first_frame()?;
+        let threads = kw.threads()?;
+        let settings = CallSettings::parse(kw)?;
         if width == 0 || height == 0 {
             return Err(value_error(format!(
                 "Stream: {width}x{height}: width and height must be at least 1"
@@ -414,18 +495,22 @@ impl Stream {
         Ok(Self {
             width,
             height,
-            settings,
-            prev: None,
-            worker: Mutex::default(),
+            layout: settings.layout(),
+            first_frame,
+            pairs: PairStream::new(first_frame),
+            worker: PairWorker::new(&settings, threads).map_err(host_error)?,
         })
     }
 
     /// push(frame, *, out=None) -> None | (height, width, 3) uint8
     ///
-    /// The representation of (previous frame, frame), or None for the
-    /// first frame since the start or reset(). With out (a writable,
+    /// This frame's image: the representation of (previous frame, frame),
+    /// or for a first frame (since the start, end() or reset()) None, or
+    /// with first_frame="black" an all-zero image. With out (a writable,
     /// C-contiguous uint8 array of the result's shape), the image is
-    /// written into it and out returned (untouched when None is returned).
+    /// written into it and out returned (untouched when None is
+    /// returned). first_frame="repeat" gives two images at the second
+    /// frame: use feed().
     #[pyo3(signature = (frame, *, out=None))]
     fn push<'py>(
         &mut self,
@@ -433,53 +518,69 @@ impl Stream {
         frame: &Bound<'py, PyAny>,
         out: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Option<Bound<'py, PyAny>>> {
-        let f = Frames::single(frame, "frame")?;
-        if f.frame_shape() != (self.height, self.width) {
-            return Err(value_error(format!(
-                "frame has shape {:?}; this Stream takes (height, width) = ({}, {})",
-                f.frame_shape(),
-                self.height,
-                self.width
-            )));
+        if self.first_frame == FirstFrame::Repeat {
+            return Err(value_error(
+                "Stream.push: first_frame=\"repeat\" gives two images at the second frame (the first frame's copy and its own); use feed(frame) and end(), which return lists",
+            ));
         }
-        let compute = self.settings.compute()?;
-        let spec = self.settings.output_spec();
-        let layout = self.settings.layout();
-        let shape = layout.shape(None, self.height, self.width);
-        // Checked even for the first frame, which writes nothing: a wrong
+        // Checked even for a first frame, which writes nothing: a wrong
         // out fails at once, not one frame later.
-        let mut output = Output::new(py, out, &shape)?;
-        let view = f.view();
-        let prev = self.prev.take();
-        let worker = &self.worker;
+        let mut output = Output::new(py, out, &self.layout.shape(None, self.height, self.width))?;
         let rgb = output.bytes();
-        let (next, written) = py
-            .detach(|| {
-                guarded(|| {
-                    let next = gray(view)?;
-                    let written = match &prev {
-                        None => false,
-                        Some(p) => {
-                            let mut worker = worker.lock().expect("no panic holding it");
-                            let pair = (p, &next);
-                            pair_into(&compute, &spec, &mut worker, pair, layout, false, rgb)?;
-                            true
-                        }
-                    };
-                    Ok((next, written))
-                })
-            })
-            .map_err(|e| {
-                self.prev = prev.clone();
-                e.into_pyerr()
+        let layout = self.layout;
+        let written = self.take(py, frame, |pairs, worker, gray| {
+            let step = pairs.push(stream_frame(gray), |prev, next| {
+                worker.pair_into((prev, next), layout, false, rgb)
             })?;
-        self.prev = Some(next);
+            // drop: nothing or the pair's image; black: its zeros first.
+            Ok(match step.outputs.into_iter().next() {
+                None => false,
+                Some(pair_stream::Output::Black { .. }) => {
+                    rgb.fill(0);
+                    true
+                }
+                Some(pair_stream::Output::Result { .. }) => true,
+            })
+        })?;
         Ok(written.then_some(output.object))
     }
 
-    /// Forget the previous frame: the next push returns None.
+    /// feed(frame) -> list of (height, width, 3) uint8
+    ///
+    /// Every image this frame gives, in order: none or one, and with
+    /// first_frame="repeat" two at the second frame (the first frame's
+    /// copy of the first pair's image, then its own).
+    fn feed<'py>(
+        &mut self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Vec<Bound<'py, PyArrayDyn<u8>>>> {
+        let layout = self.layout;
+        let outputs = self.take(py, frame, |pairs, worker, gray| {
+            Ok(pairs
+                .push(stream_frame(gray), Self::image(worker, layout))?
+                .outputs)
+        })?;
+        self.arrays(py, outputs)
+    }
+
+    /// end() -> list of (height, width, 3) uint8
+    ///
+    /// The stream ends here (the end of the input, a gap): the images its
+    /// frames still owe (with first_frame="repeat", a lone first frame
+    /// paired with itself), and the next frame is a first frame.
+    fn end<'py>(&mut self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyArrayDyn<u8>>>> {
+        let (pairs, worker, layout) = (&mut self.pairs, &mut self.worker, self.layout);
+        let owed = py
+            .detach(|| guarded(|| pairs.end(Self::image(worker, layout))))
+            .map_err(Failure::into_pyerr)?;
+        self.arrays(py, owed)
+    }
+
+    /// Forget the previous frame without an image: the next frame is a
+    /// first frame.
     fn reset(&mut self) {
-        self.prev = None;
+        self.pairs.reset();
     }
 
     /// Frame width in pixels.
@@ -492,6 +593,12 @@ impl Stream {
     #[getter]
     fn height(&self) -> usize {
         self.height
+    }
+
+    /// What the first frame gives: "drop", "black" or "repeat".
+    #[getter]
+    fn first_frame(&self) -> &'static str {
+        self.first_frame.name()
     }
 }
 

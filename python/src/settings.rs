@@ -13,9 +13,12 @@ use reynoldsflow_host::outputs::{
     self, DEFAULT_JPEG_QUALITY, Fields, ImageFormat, JpegSubsampling, NpyDtype, OutputSpec,
     PngCompression, Variant,
 };
-use reynoldsflow_host::pipeline::Compute;
+use reynoldsflow_host::HostError;
 use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate};
-use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize, parse_choice};
+use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::settings::{
+    self, EngineKind, FirstFrame, ScaleArg, Settings, TileSize, parse_choice,
+};
 
 use crate::errors::{host_error, value_error};
 
@@ -198,6 +201,15 @@ impl<'py> Kwargs<'py> {
             .transpose()
     }
 
+    /// `first_frame`: what a stream's first frame gives, default the
+    /// library's.
+    pub fn first_frame(&mut self) -> PyResult<FirstFrame> {
+        match self.get::<String>("first_frame")? {
+            Some(name) => choice::<FirstFrame>("first_frame", &name),
+            None => Ok(settings::DEFAULT_FIRST_FRAME),
+        }
+    }
+
     /// `threads`: at least 1, default every core.
     pub fn threads(&mut self) -> PyResult<usize> {
         match self.get::<i64>("threads")? {
@@ -246,18 +258,6 @@ pub enum Layout {
     Hwc,
     /// `(..., 3, H, W)`, channels first, as torchvision's tensors.
     Chw,
-}
-
-/// `rgb` (RGB8 pixels) in `layout`: itself, or its three planes.
-pub fn arrange(rgb: Vec<u8>, layout: Layout) -> Vec<u8> {
-    match layout {
-        Layout::Hwc => rgb,
-        Layout::Chw => {
-            let mut out = vec![0u8; rgb.len()];
-            layout.place(&rgb, &mut out);
-            out
-        }
-    }
 }
 
 impl Layout {
@@ -463,7 +463,7 @@ impl CallSettings {
             },
             layout,
         };
-        call.compute()?;
+        call.settings.compute().map_err(host_error)?;
         Ok(call)
     }
 
@@ -477,18 +477,13 @@ impl CallSettings {
         self.layout
     }
 
-    /// The host's computation, checked as `reynoldsflow pair` checks it.
-    pub fn compute(&self) -> PyResult<Compute> {
-        self.settings.compute().map_err(host_error)
-    }
-
-    /// The image to return.
-    pub fn output_spec(&self) -> OutputSpec {
-        OutputSpec {
-            variant: self.settings.variant,
-            hsv_max: self.settings.hsv_max,
-            ..OutputSpec::default()
-        }
+    /// The host's pair engine of these settings, on `threads` threads
+    /// (checked as `reynoldsflow pair` checks them).
+    pub fn pair_engine(&self, threads: usize) -> Result<PairEngine, HostError> {
+        PairEngine::new(&Settings {
+            threads: Some(threads),
+            ..self.settings.clone()
+        })
     }
 }
 

@@ -51,6 +51,51 @@ def test_stream_equals_represent_pair_by_pair():
     assert np.array_equal(s.push(c[1]), rf.represent(c[0], c[1]))
 
 
+def test_stream_first_frame_policies_give_the_element_s_outputs():
+    c = clip(4)
+    pairs = [rf.represent(c[i], c[i + 1]) for i in range(3)]
+    zeros = np.zeros_like(pairs[0])
+    drop, black, repeat = (rf.Stream(48, 32, first_frame=p) for p in ("drop", "black", "repeat"))
+    assert (drop.first_frame, black.first_frame, repeat.first_frame) == ("drop", "black", "repeat")
+    # push: at most one image per frame.
+    assert drop.push(c[0]) is None and np.array_equal(black.push(c[0]), zeros)
+    for i in range(1, 4):
+        assert np.array_equal(drop.push(c[i]), pairs[i - 1]) and np.array_equal(black.push(c[i]), pairs[i - 1])
+    # feed: every image, one per frame with repeat (the first a copy of the first pair's).
+    got = [repeat.feed(f) for f in c] + [repeat.end()]
+    assert [len(g) for g in got] == [0, 2, 1, 1, 0]
+    expected = [pairs[0], pairs[0], pairs[1], pairs[2]]
+    assert all(np.array_equal(a, b) for a, b in zip(sum(got, []), expected))
+    assert got[1][0] is not got[1][1]
+    # A stream of one frame still gives its frame an image: itself, paired with itself.
+    assert repeat.feed(c[2]) == [] and len(lone := repeat.end()) == 1
+    assert np.array_equal(lone[0], rf.represent(c[2], c[2]))
+    # end() and reset() make the next frame a first frame.
+    black.end()
+    assert np.array_equal(black.feed(c[1])[0], zeros)
+    drop.reset()
+    assert drop.feed(c[1]) == [] and np.array_equal(drop.feed(c[2])[0], pairs[1])
+    with pytest.raises(ValueError, match="feed"):
+        repeat.push(c[0])
+    with pytest.raises(ValueError, match="first_frame"):
+        rf.Stream(48, 32, first_frame="twice")
+
+
+@pytest.mark.parametrize("size", [(48, 32), (641, 7), (5, 300)])
+def test_stream_threads_give_the_bytes_of_one(size):
+    w, h = size
+    c = clip(3, w, h)
+    for threads in (2, 3, None):
+        one = [rf.Stream(w, h, threads=1, layout=layout) for layout in ("hwc", "chw")]
+        many = [rf.Stream(w, h, threads=threads, layout=layout) for layout in ("hwc", "chw")]
+        for f in c:
+            for a, b in zip(one, many):
+                x, y = a.feed(f), b.feed(f)
+                assert len(x) == len(y) and all(np.array_equal(p, q) for p, q in zip(x, y)), threads
+    with pytest.raises(ValueError, match="threads"):
+        rf.Stream(w, h, threads=0)
+
+
 def test_motion_scores():
     c = clip(5)
     reps, scores = rf.represent_clip(c, return_scores=True)

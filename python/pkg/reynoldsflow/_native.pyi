@@ -3,7 +3,7 @@ docstring (`reynoldsflow/__init__.py`) documents the options they share."""
 
 from os import PathLike
 from fractions import Fraction
-from typing import Iterator, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Iterator, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 from typing_extensions import NotRequired
 
@@ -173,15 +173,22 @@ def represent_clip(
     read-only array ValueError."""
 
 class Stream:
-    """Frames pushed one at a time (a camera, a decoder): push(frame)
-    returns None for the first frame, then the representation of (previous
-    frame, this frame), the same bytes as represent()."""
+    """Frames pushed one at a time (a camera, a decoder), paired as the
+    GStreamer element and the ROS 2 node pair them: each frame with the one
+    before, every image the same bytes as represent(previous, this).
+
+    first_frame: "drop" (the default) gives nothing for a first frame;
+    "black" an all-zero image; "repeat" a copy of the first pair's image,
+    given with it at the second frame (feed() and end() only). Each pair is
+    computed on `threads` threads (default every core)."""
 
     def __init__(
         self,
         width: int,
         height: int,
         *,
+        first_frame: Literal["drop", "repeat", "black"] = "drop",
+        threads: Optional[int] = None,
         engine: Engine = "fixed",
         scale: Scale = "minmax",
         intensity_scale: IntensityScale = ...,
@@ -192,16 +199,27 @@ class Stream:
         layout: Layout = "hwc",
     ) -> None: ...
     def push(self, frame: Frame, *, out: Optional[Out] = None) -> Optional[npt.NDArray[np.uint8]]:
-        """The (height, width, 3) representation of (previous frame, frame),
-        or None for the first frame since the start or reset(). With out
+        """This frame's (height, width, 3) image: the representation of
+        (previous frame, frame), or for a first frame (since the start,
+        end() or reset()) None, or with first_frame="black" zeros. With out
         (as represent_clip's), the image is written into it and out
-        returned."""
+        returned. Raises ValueError with first_frame="repeat": use feed()."""
+    def feed(self, frame: Frame) -> List[npt.NDArray[np.uint8]]:
+        """Every image this frame gives, in order: none or one, and with
+        first_frame="repeat" two at the second frame."""
+    def end(self) -> List[npt.NDArray[np.uint8]]:
+        """The stream ends here: the images it still owes (with
+        first_frame="repeat", a lone first frame paired with itself); the
+        next frame is a first frame."""
     def reset(self) -> None:
-        """Forget the previous frame: the next push returns None."""
+        """Forget the previous frame without an image: the next frame is a
+        first frame."""
     @property
     def width(self) -> int: ...
     @property
     def height(self) -> int: ...
+    @property
+    def first_frame(self) -> Literal["drop", "repeat", "black"]: ...
 
 class Record(TypedDict):
     path: str

@@ -248,7 +248,8 @@ class ReynoldsFlowDataset(IterableDataset):
         for index, frame in frames:
             if stream is None:
                 h, w = frame.shape
-                stream = _rf.Stream(w, h, layout="chw", **self.image_options)
+                # One thread: the DataLoader's workers are the parallelism.
+                stream = _rf.Stream(w, h, layout="chw", threads=1, **self.image_options)
                 stream.push(frame)
             else:
                 # A frame of another size raises, as `reynoldsflow run` refuses it.
