@@ -490,8 +490,13 @@ impl Stream {
                 reynoldsflow_core::MAX_SIDE
             )));
         }
-        reynoldsflow_host::limits::check_frame_size(width, height)
-            .map_err(|e| value_error(format!("Stream: {e}")))?;
+        // (The host's message names the command line's --max-pixels.)
+        if reynoldsflow_host::limits::check_frame_size(width, height).is_err() {
+            return Err(value_error(format!(
+                "Stream: {width}x{height}: more than the {} pixels a frame may have",
+                reynoldsflow_host::limits::max_pixels()
+            )));
+        }
         Ok(Self {
             width,
             height,
