@@ -155,10 +155,12 @@ pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
 /// the same at every setting (PNG is lossless).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PngCompression {
-    /// fdeflate's PNG-tuned DEFLATE (the `png` crate's fast path), adaptive
-    /// row filters, as the `image` crate's encoder defaults to: at 640×480
-    /// an order of magnitude faster than `Default`, the files about as
-    /// small (docs/PERFORMANCE.md, `scripts/bench-dataset`).
+    /// fdeflate's PNG-tuned DEFLATE (the `png` crate's fast path), every
+    /// row Paeth-filtered: at 640×480 an order of magnitude faster than
+    /// `Default`, the files about as small (docs/PERFORMANCE.md,
+    /// `scripts/bench-dataset`). On representations of real footage Paeth
+    /// alone makes files as small as the adaptive choice per row, in 5–10 %
+    /// less time.
     #[default]
     Fast,
     /// zlib's default level (flate2).
@@ -222,13 +224,13 @@ pub fn encode_png_with(
         u32::try_from(width).map_err(|_| too_large())?,
         u32::try_from(height).map_err(|_| too_large())?,
     );
-    let level = match compression {
-        PngCompression::Fast => CompressionType::Fast,
-        PngCompression::Default => CompressionType::Default,
-        PngCompression::Best => CompressionType::Best,
+    let (level, filter) = match compression {
+        PngCompression::Fast => (CompressionType::Fast, FilterType::Paeth),
+        PngCompression::Default => (CompressionType::Default, FilterType::Adaptive),
+        PngCompression::Best => (CompressionType::Best, FilterType::Adaptive),
     };
     let mut png = Vec::with_capacity(rgb.len() / 2);
-    PngEncoder::new_with_quality(&mut png, level, FilterType::Adaptive)
+    PngEncoder::new_with_quality(&mut png, level, filter)
         .write_image(rgb, w, h, ExtendedColorType::Rgb8)
         .map_err(|e| HostError::invalid("image", format!("cannot encode PNG: {e}")))?;
     Ok(png)
