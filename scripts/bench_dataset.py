@@ -24,6 +24,7 @@ compare ratios, and read `uptime` (printed first and last).
 
 import argparse
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -69,13 +70,22 @@ def make_tree(clip, tree, items, frames, total):
             check=True)
 
 
+def cpu_seconds(who):
+    """User + system seconds of this process (RUSAGE_SELF) or of its
+    finished children (RUSAGE_CHILDREN) so far."""
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
 def timed(cmd, out_dir=None, stdout=subprocess.DEVNULL):
-    """Wall seconds of one process; `out_dir` is emptied first (not timed)."""
+    """Wall seconds of one process, and its CPU seconds (its own and its
+    children's: ffmpeg's decoding included); `out_dir` is emptied first
+    (not timed)."""
     if out_dir:
         shutil.rmtree(out_dir, ignore_errors=True)
-    t = time.perf_counter()
+    cpu, t = cpu_seconds(resource.RUSAGE_CHILDREN), time.perf_counter()
     subprocess.run(cmd, stdout=stdout, stderr=subprocess.DEVNULL, check=True)
-    return time.perf_counter() - t
+    return time.perf_counter() - t, cpu_seconds(resource.RUSAGE_CHILDREN) - cpu
 
 
 def files_of(folder, ext):
@@ -95,7 +105,7 @@ def opencv_script(clip, out_dir):
     frames, the colour-wheel image of the flow, cv2.imwrite PNG."""
     shutil.rmtree(out_dir, ignore_errors=True)
     os.makedirs(out_dir)
-    t = time.perf_counter()
+    cpu, t = cpu_seconds(resource.RUSAGE_SELF), time.perf_counter()
     cap = cv2.VideoCapture(clip)
     dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST)
     ok, frame = cap.read()
@@ -114,7 +124,7 @@ def opencv_script(clip, out_dir):
         hsv[..., 2] = cv2.normalize(mag, None, 0, 255, cv2.NORM_MINMAX)
         cv2.imwrite(os.path.join(out_dir, f"{n:06}.png"), cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR))
         prev, n = gray, n + 1
-    return time.perf_counter() - t
+    return time.perf_counter() - t, cpu_seconds(resource.RUSAGE_SELF) - cpu
 
 
 def summary(values):
@@ -171,12 +181,15 @@ def main():
                  lambda: opencv_script(clip, out("opencv"))))
     base_ref = next((i for i, r in enumerate(rows) if r[0].startswith("baseline")), 0)
     seconds = [[] for _ in rows]
+    cpus = [[] for _ in rows]
     for _ in range(args.rounds):
         for i, (_, _, fn) in enumerate(rows):
-            seconds[i].append(fn())
+            wall, cpu = fn()
+            seconds[i].append(wall)
+            cpus[i].append(cpu)
     print(f"\n### `reynoldsflow run --threads 1`, {pairs} pairs of a 640x480 H.264 clip, {args.rounds} rounds\n")
-    print("| output | pairs/s | of the same round's rgb24 run | bytes per file |")
-    print("|---|---:|---:|---:|")
+    print("| output | pairs/s | of the same round's rgb24 run | CPU ms per pair | bytes per file |")
+    print("|---|---:|---:|---:|---:|")
     for i, (label, files, _) in enumerate(rows):
         n = slow if "first" in label else pairs
         rate = n / statistics.median(seconds[i])
@@ -187,7 +200,8 @@ def main():
         mid, lo, hi = summary(ratios)
         size = f"{bytes_per_file(out(files[1]), files[0]) / 1024:.0f} KiB" if files else "–"
         ratio = f"{mid:.2f} [{lo:.2f}, {hi:.2f}]" if not label.startswith("OpenCV") else "–"
-        print(f"| {label} | {rate:.0f} | {ratio} | {size} |")
+        cpu = 1000 * statistics.median(cpus[i]) / n
+        print(f"| {label} | {rate:.0f} | {ratio} | {cpu:.2f} | {size} |")
 
     sizes = ", ".join(f"{level} {bytes_per_file(out('png-' + level), '.png', slow) / 1024:.0f} KiB"
                       for level in ["fast", "default", "best"])
@@ -222,7 +236,7 @@ def main():
     ds_seconds = [[] for _ in cases]
     for _ in range(args.rounds):
         for i, case in enumerate(cases):
-            ds_seconds[i].append(case[4]())
+            ds_seconds[i].append(case[4]()[0])
     print(f"\n### `reynoldsflow dataset`, {args.items} H.264 clips of {args.item_frames} frames "
           f"({tree_pairs} pairs), {args.rounds} rounds\n")
     print(f"| build | images | threads | pairs/s | of this build's 1 thread | of the baseline's | bytes per file |")
