@@ -20,9 +20,9 @@ use reynoldsflow_host::dataset::{self, Record, Shard};
 use reynoldsflow_host::outputs::flo;
 use reynoldsflow_host::pair_engine::PairEngine;
 use reynoldsflow_host::pair_stream::{self, PairStream};
-use reynoldsflow_host::settings::FirstFrame;
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
+use reynoldsflow_host::settings::FirstFrame;
 use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic, workers};
 
 mod errors;
@@ -319,14 +319,19 @@ fn represent_clip<'py>(
                     .chunks_exact_mut(frame_bytes)
                     .map(Mutex::new)
                     .collect();
-                let scores = workers::map_indices(threads, results, || None, |worker, i| {
-                    let worker = PairWorker::of(worker, &settings)?;
-                    let pair = (&grays[i], &grays[i + 1]);
-                    let mut slot = slots[i].lock().expect("one thread takes each pair");
-                    worker.pair_into(pair, layout, return_scores, &mut slot)
-                })
-                    .into_iter()
-                    .collect::<Result<Vec<f64>, HostError>>()?;
+                let scores = workers::map_indices(
+                    threads,
+                    results,
+                    || None,
+                    |worker, i| {
+                        let worker = PairWorker::of(worker, &settings)?;
+                        let pair = (&grays[i], &grays[i + 1]);
+                        let mut slot = slots[i].lock().expect("one thread takes each pair");
+                        worker.pair_into(pair, layout, return_scores, &mut slot)
+                    },
+                )
+                .into_iter()
+                .collect::<Result<Vec<f64>, HostError>>()?;
                 drop(slots);
                 if keep_count {
                     kept.copy_from_slice(&images[(results - 1) * frame_bytes..]);
