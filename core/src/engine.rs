@@ -427,7 +427,7 @@ fn tail_input<'a>(
 ) -> TailInput<'a> {
     #[cfg(target_arch = "x86_64")]
     if let SumRings::Blocked { avx2, ints, floats } = sums {
-        let rows = crate::avx2::BlockedRows {
+        let rows = crate::kernels::avx2::BlockedRows {
             ints,
             floats,
             first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
@@ -447,7 +447,7 @@ fn tail_input<'a>(
 enum TailInput<'a> {
     Planar(TailRows<'a>),
     #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, crate::avx2::BlockedRows<'a>),
+    Blocked(crate::Avx2, crate::kernels::avx2::BlockedRows<'a>),
 }
 
 impl TailInput<'_> {
@@ -461,7 +461,9 @@ impl TailInput<'_> {
                 None
             }
             #[cfg(target_arch = "x86_64")]
-            Self::Blocked(avx2, rows) => Some(crate::avx2::tail_row(*avx2, constants, rows, out)),
+            Self::Blocked(avx2, rows) => {
+                Some(crate::kernels::avx2::tail_row(*avx2, constants, rows, out))
+            }
         }
     }
 }

@@ -54,7 +54,7 @@
 //! only with a SPEC change, recorded in the repository's golden files.
 #![no_std]
 // `unsafe` is allowed only where it lives, each block with its safety
-// argument: in `fpu.rs`, the `f32` square root on x86-64 (SSE) and aarch64
+// argument, all in `kernels/`: in `fpu.rs`, the `f32` square root on x86-64 (SSE) and aarch64
 // (NEON) through intrinsics, which vectorise where `libm`'s inline assembly
 // does not, and on the M4F (`VSQRT.F32` in `asm!`; `core` has no `f32` root
 // on stable, `libm`'s is software there), and the byte conversion of a
@@ -73,18 +73,11 @@
 #[cfg(test)]
 extern crate std;
 
-#[cfg(target_arch = "x86_64")]
-mod avx2;
 mod engine;
 mod error;
-mod fpu;
 mod frames;
 mod job;
-#[cfg(feature = "kernel-check")]
-#[doc(hidden)]
-pub mod kernel_check;
-#[cfg(fpu_f32)]
-mod m4;
+mod kernels;
 mod params;
 mod pixels;
 mod plan;
@@ -96,7 +89,6 @@ mod sink;
 mod stages;
 mod stream;
 mod tail;
-mod wide_products;
 
 /// Whether the compiler takes the row loops in vector lanes (`build.rs`):
 /// there, forms that keep a loop branch-free with independent taps win; on
@@ -104,8 +96,6 @@ mod wide_products;
 /// registers do (`stages`, `scale`).
 const VECTOR_ROWS: bool = cfg!(vector_rows);
 
-#[cfg(target_arch = "x86_64")]
-pub use avx2::Avx2;
 pub use engine::{
     Arrays, Engine, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine, working_bytes,
 };
@@ -113,6 +103,11 @@ pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};
 pub use job::Job;
+#[cfg(target_arch = "x86_64")]
+pub use kernels::avx2::Avx2;
+#[cfg(feature = "kernel-check")]
+#[doc(hidden)]
+pub use kernels::kernel_check;
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
 pub use pixels::{Fields, FlowPixel, Pixels};
 pub use plan::{Plan, Tile, first_stage_pixels};

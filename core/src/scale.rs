@@ -81,7 +81,7 @@ impl ByteScale {
     /// clamped to `[0, 255]` (truncated toward zero).
     #[inline(always)]
     pub fn byte(&self, m: f32) -> u8 {
-        crate::fpu::byte((m - self.offset) * self.gain + 0.5)
+        crate::kernels::fpu::byte((m - self.offset) * self.gain + 0.5)
     }
 
     /// `[offset, gain]`: [`ByteScale::byte`] is `⌊t⌋` of

@@ -138,7 +138,7 @@ pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out
         let (Some(out), Some(luma)) = (out.get_mut(..n), luma.get(..n)) else {
             return;
         };
-        crate::m4::rgb_row([m_d, m_c], luma, [scale_d.parts(), scale_c.parts()], out);
+        crate::kernels::m4::rgb_row([m_d, m_c], luma, [scale_d.parts(), scale_c.parts()], out);
     }
     #[cfg(not(fpu_f32))]
     portable_rgb_tail(m_d, m_c, luma, [scale_d, scale_c], out);

@@ -86,13 +86,13 @@ impl Sample for i32 {
     #[cfg(fpu_f32)]
     #[inline(always)]
     fn binomial_rows(rows: [&[i32]; 5], out: &mut [i32]) {
-        crate::m4::binomial_i32(rows, out);
+        crate::kernels::m4::binomial_i32(rows, out);
     }
 
     #[cfg(fpu_f32)]
     #[inline(always)]
     fn binomial_taps(taps: &[i32], out: &mut [i32]) {
-        crate::m4::running_binomial_i32(taps, out);
+        crate::kernels::m4::running_binomial_i32(taps, out);
     }
 }
 
@@ -109,13 +109,13 @@ impl Sample for f32 {
     #[cfg(fpu_f32)]
     #[inline(always)]
     fn binomial_rows(rows: [&[f32]; 5], out: &mut [f32]) {
-        crate::m4::binomial_f32(rows, out);
+        crate::kernels::m4::binomial_f32(rows, out);
     }
 
     #[cfg(fpu_f32)]
     #[inline(always)]
     fn binomial_taps(taps: &[f32], out: &mut [f32]) {
-        crate::m4::sliding_binomial_f32(taps, out);
+        crate::kernels::m4::sliding_binomial_f32(taps, out);
     }
 }
 
@@ -299,7 +299,7 @@ fn vertical_parts(
         return;
     };
     #[cfg(fpu_f32)]
-    if crate::m4::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
+    if crate::kernels::m4::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
         return;
     }
     vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
@@ -675,7 +675,7 @@ fn products_row(
         return;
     };
     if cfg!(fpu_f32) {
-        crate::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
+        crate::kernels::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
     } else {
         portable_products_row(input, xx, xy, yy, xd, yd, cols);
     }
@@ -921,7 +921,13 @@ pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n:
         Sums::Blocked(avx2, int_sums, float_sums, slot) => {
             let ints = int_products.each_ref().map(|row| &row[..]);
             let floats = float_products.each_ref().map(|row| &row[..]);
-            crate::avx2::horizontal_sums(avx2, ints, floats, (int_sums, float_sums, slot), n);
+            crate::kernels::avx2::horizontal_sums(
+                avx2,
+                ints,
+                floats,
+                (int_sums, float_sums, slot),
+                n,
+            );
         }
     }
 }

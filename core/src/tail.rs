@@ -30,7 +30,7 @@
 //! at `s = 1/1024, λ = 1e-6` well inside the tolerances
 //! (`tests/tests/accuracy.rs`).
 
-use crate::fpu::sqrt;
+use crate::kernels::fpu::sqrt;
 use crate::params::Units;
 use crate::stages::opaque;
 
@@ -122,8 +122,8 @@ pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
             v: [vx, vy],
         } = *rows;
         let units = [k.units.det_floor, k.units.v_d];
-        crate::m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
-        crate::m4::curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
+        crate::kernels::m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
+        crate::kernels::m4::curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
         return;
     }
     tail_row_portable(k, rows, out);

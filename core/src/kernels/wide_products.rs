@@ -69,7 +69,7 @@ pub(crate) fn products_row(
     };
     // The M4F and M7 run two of the loops in assembly (`m4`).
     #[cfg(fpu_f32)]
-    crate::m4::gradients(up, mid, down, gx, gy);
+    crate::kernels::m4::gradients(up, mid, down, gx, gy);
     #[cfg(not(fpu_f32))]
     gradients_of(up, mid, down, gx, gy);
     int_products_of(gx, gy, xx, xy, yy);
@@ -79,7 +79,7 @@ pub(crate) fn products_row(
     if shift == 8 {
         residual_base_of::<8>(kappa, shift, p0, d, high, low);
         #[cfg(fpu_f32)]
-        crate::m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
+        crate::kernels::m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
         #[cfg(not(fpu_f32))]
         residual_products_of::<8>(shift, gx, gy, vx, vy, high, low, xd, yd);
     } else {

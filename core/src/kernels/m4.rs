@@ -648,7 +648,7 @@ pub(crate) fn residual_products_8(
 /// column, two columns a step (the carried values move back into place at
 /// the step's end). Rows shorter than `gx` leave it untouched.
 pub(crate) fn gradients(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
-    use crate::wide_products::{gradient_column, gradient_rows};
+    use crate::kernels::wide_products::{gradient_column, gradient_rows};
     let len = gx.len();
     let (Some(rows), Some(gy)) = (gradient_rows([up, mid, down], len), gy.get_mut(..len)) else {
         return;
