@@ -44,61 +44,42 @@
 
 use core::ops::Add;
 
+use crate::kernels::KernelSet;
+
 /// What the binomial sums add: exact integers, or `f32` (the sums of `p`
 /// and `q`).
 pub trait Sample: Copy + Default + Add<Output = Self> {
-    /// Whether sums are exact, so that any order of adding gives the same
-    /// value (the running form below; `f32` sums keep one order everywhere).
-    const EXACT: bool;
-
     /// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
     fn binomial(a: Self, b: Self, c: Self, d: Self, e: Self) -> Self;
 
     /// [`Sample::binomial`] of every column of five rows on the scalar
-    /// boards (`out.len()` columns; shorter rows leave `out` untouched).
-    #[inline(always)]
-    fn binomial_rows(rows: [&[Self]; 5], out: &mut [Self]) {
-        let [a, b, c, d, e] = rows;
-        binomial_of(a, b, c, d, e, out);
-    }
+    /// boards (`out.len()` columns; shorter rows leave `out` untouched):
+    /// the set's kernel for this kind of sum.
+    fn binomial_rows<K: KernelSet>(rows: [&[Self]; 5], out: &mut [Self]);
 
     /// The horizontal binomial of `out.len() + 4` taps on the scalar
-    /// boards: [`running_binomial`] for exact sums, [`sliding_binomial`]
-    /// (the tapped order) for `f32`.
-    #[inline(always)]
-    fn binomial_taps(taps: &[Self], out: &mut [Self]) {
-        if Self::EXACT {
-            running_binomial(taps, out);
-        } else {
-            sliding_binomial(taps, out);
-        }
-    }
+    /// boards: the set's kernel for this kind of sum.
+    fn binomial_taps<K: KernelSet>(taps: &[Self], out: &mut [Self]);
 }
 
 impl Sample for i32 {
-    const EXACT: bool = true;
-
     #[inline(always)]
     fn binomial(a: i32, b: i32, c: i32, d: i32, e: i32) -> i32 {
         (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
     }
 
-    #[cfg(fpu_f32)]
     #[inline(always)]
-    fn binomial_rows(rows: [&[i32]; 5], out: &mut [i32]) {
-        crate::kernels::m4::binomial_i32(rows, out);
+    fn binomial_rows<K: KernelSet>(rows: [&[i32]; 5], out: &mut [i32]) {
+        K::binomial_rows_i32(rows, out);
     }
 
-    #[cfg(fpu_f32)]
     #[inline(always)]
-    fn binomial_taps(taps: &[i32], out: &mut [i32]) {
-        crate::kernels::m4::running_binomial_i32(taps, out);
+    fn binomial_taps<K: KernelSet>(taps: &[i32], out: &mut [i32]) {
+        K::binomial_taps_i32(taps, out);
     }
 }
 
 impl Sample for f32 {
-    const EXACT: bool = false;
-
     /// In this order on every target (`×4` is exact; `×6` and each sum
     /// round once).
     #[inline(always)]
@@ -106,16 +87,14 @@ impl Sample for f32 {
         ((a + e) + (b + d) * 4.0) + c * 6.0
     }
 
-    #[cfg(fpu_f32)]
     #[inline(always)]
-    fn binomial_rows(rows: [&[f32]; 5], out: &mut [f32]) {
-        crate::kernels::m4::binomial_f32(rows, out);
+    fn binomial_rows<K: KernelSet>(rows: [&[f32]; 5], out: &mut [f32]) {
+        K::binomial_rows_f32(rows, out);
     }
 
-    #[cfg(fpu_f32)]
     #[inline(always)]
-    fn binomial_taps(taps: &[f32], out: &mut [f32]) {
-        crate::kernels::m4::sliding_binomial_f32(taps, out);
+    fn binomial_taps<K: KernelSet>(taps: &[f32], out: &mut [f32]) {
+        K::binomial_taps_f32(taps, out);
     }
 }
 
@@ -128,7 +107,12 @@ fn span(n: usize, r: usize) -> core::ops::Range<usize> {
 
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[inline(always)]
-pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize) {
+pub(crate) fn vertical_binomial<K: KernelSet, T: Sample>(
+    rows: [&[T]; 5],
+    out: &mut [T],
+    n: usize,
+    r: usize,
+) {
     let cols = span(n, r);
     let len = cols.len();
     let [a, b, c, d, e] = rows.map(|row| cut(row, cols.start, len));
@@ -140,7 +124,7 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
     if crate::VECTOR_ROWS {
         binomial_of(a, b, c, d, e, opaque(out));
     } else {
-        T::binomial_rows([a, b, c, d, e], out);
+        T::binomial_rows::<K>([a, b, c, d, e], out);
     }
 }
 
@@ -176,7 +160,12 @@ pub(crate) fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T]
 
 /// The horizontal binomial of a row valid on `[r − 2, n − r + 2)`, on `[r, n − r)`.
 #[inline(always)]
-fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) {
+pub(crate) fn horizontal_binomial<K: KernelSet, T: Sample>(
+    row: &[T],
+    out: &mut [T],
+    n: usize,
+    r: usize,
+) {
     let cols = span(n, r.max(2));
     let len = cols.len();
     let Some(out) = cut_mut(out, cols.start, len) else {
@@ -190,7 +179,7 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
     if crate::VECTOR_ROWS {
         tapped_binomial(row, first, out);
     } else if let Some(taps) = cut(row, first, len + 4) {
-        T::binomial_taps(taps, out);
+        T::binomial_taps::<K>(taps, out);
     }
 }
 
@@ -258,7 +247,7 @@ pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
 #[inline(always)]
-pub fn boundary_minus_domain(
+pub fn boundary_minus_domain<K: KernelSet>(
     d: [&[i16]; 5],
     vert: &mut [&mut [i16]; 4],
     e: Pair<'_, i32>,
@@ -266,18 +255,18 @@ pub fn boundary_minus_domain(
     n: usize,
 ) {
     let [v1, v2, v3, v4] = vert;
-    vertical_parts(d, v1, v2, v3, v4, span(n, 0));
+    vertical_parts::<K>(d, v1, v2, v3, v4, span(n, 0));
     let (ex, ey) = e;
     horizontal_parts([v1, v2, v3, v4], ex, ey, span(n, 2));
     // The horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
     // vertical one): the ring keeps `E` smoothed along its row.
-    horizontal_binomial(ex, e_smoothed.0, n, 4);
-    horizontal_binomial(ey, e_smoothed.1, n, 4);
+    horizontal_binomial::<K, _>(ex, e_smoothed.0, n, 4);
+    horizontal_binomial::<K, _>(ey, e_smoothed.1, n, 4);
 }
 
 /// The four vertical parts of `E` on columns `cols`.
 #[inline(always)]
-fn vertical_parts(
+fn vertical_parts<K: KernelSet>(
     d: [&[i16]; 5],
     v1: &mut [i16],
     v2: &mut [i16],
@@ -298,8 +287,7 @@ fn vertical_parts(
     ) else {
         return;
     };
-    #[cfg(fpu_f32)]
-    if crate::kernels::m4::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
+    if K::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
         return;
     }
     vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
@@ -535,10 +523,10 @@ fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
 /// vector lanes (with the horizontal half last, from a scratch row into
 /// the ring of `V`, the x86-64 pass ran it scalar).
 #[inline(always)]
-pub fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
+pub fn smooth<K: KernelSet>(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e_smoothed;
-    vertical_binomial(ex, v.0, n, 4);
-    vertical_binomial(ey, v.1, n, 4);
+    vertical_binomial::<K, _>(ex, v.0, n, 4);
+    vertical_binomial::<K, _>(ey, v.1, n, 4);
     debug_assert!(
         v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
         "V beyond its bound"
@@ -649,12 +637,11 @@ fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
     ])
 }
 
-/// The five products on columns `cols`: on the M4F `wide_products`'
-/// loops, elsewhere every row cut to exactly the columns (shifted rows one
-/// either side), then [`products_of`].
+/// The five products on columns `cols`: the product rows cut to them, then
+/// the set's kernel ([`portable_products_row`] by default).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn products_row(
+fn products_row<K: KernelSet>(
     input: &ResidualInputs<'_>,
     xx: &mut [i32],
     xy: &mut [i32],
@@ -674,15 +661,11 @@ fn products_row(
     ) else {
         return;
     };
-    if cfg!(fpu_f32) {
-        crate::kernels::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
-    } else {
-        portable_products_row(input, xx, xy, yy, xd, yd, cols);
-    }
+    K::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
 }
 
-/// [`products_row`] on the targets other than the M4F, into product rows
-/// already cut to the columns.
+/// [`products_row`]'s portable kernel, into product rows already cut to
+/// the columns.
 #[inline(always)]
 pub(crate) fn portable_products_row(
     input: &ResidualInputs<'_>,
@@ -854,8 +837,8 @@ fn products_of(
 }
 
 /// Rows a structure row may use for its intermediate values (the engine
-/// lends rows that are free at that point; the M4F's products use them,
-/// `wide_products`).
+/// lends rows that are free at that point; a kernel set's products may use
+/// them, the M4F's do).
 pub struct ScratchRows<'a> {
     /// `X`.
     pub gx: &'a mut [i16],
@@ -867,69 +850,33 @@ pub struct ScratchRows<'a> {
     pub low: &'a mut [i32],
 }
 
-/// The products' rows and the sums' rows of one structure row: the exact
-/// integer channels and the `f32` ones.
+/// The products' rows of one structure row: the exact integer channels
+/// and the `f32` ones.
 pub struct StructureRows<'a, 'm> {
     /// `X², XY, Y²` on `[5, n−5)`.
     pub int_products: &'a mut [&'m mut [i32]; INT_CHANNELS],
     /// `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on `[5, n−5)`.
     pub float_products: &'a mut [&'m mut [f32]; FLOAT_CHANNELS],
-    /// Where their horizontal `G` on `[7, n−7)` goes.
-    pub sums: Sums<'a>,
-    /// Rows for the intermediate values (FPU boards).
+    /// Rows for the intermediate values.
     pub scratch: ScratchRows<'a>,
 }
 
-/// One row of each structure sums ring: a row per channel (the integer
-/// channels', then the `f32` ones'), or with the AVX2 kernels one row of
-/// blocks of each kind (`avx2`).
-pub enum Sums<'a> {
-    /// A row per channel.
-    Planar(
-        [&'a mut [i32]; INT_CHANNELS],
-        [&'a mut [f32]; FLOAT_CHANNELS],
-    ),
-    /// The integer and the `f32` rings' memory in blocks, and the row's
-    /// slot (`avx2`).
-    #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, &'a mut [i32], &'a mut [f32], usize),
-}
-
-/// The five products on `[5, n−5)`, then their horizontal `G` on
-/// `[7, n−7)` into one row of each sum ring.
+/// The five products on `[5, n−5)` (their horizontal `G` into the sums'
+/// rings is the rings' own, `kernels::SumRings::store_row`).
 #[inline(always)]
-pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n: usize) {
+pub fn structure_row<K: KernelSet>(
+    input: &ResidualInputs<'_>,
+    rows: StructureRows<'_, '_>,
+    n: usize,
+) {
     let StructureRows {
         int_products,
         float_products,
-        sums,
         scratch,
     } = rows;
     let [xx, xy, yy] = int_products;
     let [xd, yd] = float_products;
-    products_row(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
-    match sums {
-        Sums::Planar(int_sums, float_sums) => {
-            for (row, sum) in int_products.iter().zip(int_sums) {
-                horizontal_binomial(row, sum, n, 7);
-            }
-            for (row, sum) in float_products.iter().zip(float_sums) {
-                horizontal_binomial(row, sum, n, 7);
-            }
-        }
-        #[cfg(target_arch = "x86_64")]
-        Sums::Blocked(avx2, int_sums, float_sums, slot) => {
-            let ints = int_products.each_ref().map(|row| &row[..]);
-            let floats = float_products.each_ref().map(|row| &row[..]);
-            crate::kernels::avx2::horizontal_sums(
-                avx2,
-                ints,
-                floats,
-                (int_sums, float_sums, slot),
-                n,
-            );
-        }
-    }
+    products_row::<K>(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
 }
 
 #[cfg(test)]

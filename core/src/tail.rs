@@ -105,33 +105,11 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
     sqrt(x * x + y * y) * k.units.v_c
 }
 
-/// The tail of every pixel of `out`. Every row is as long as `m_d` (the
-/// engine's are); should one be shorter, nothing is written.
+/// The tail of every pixel of `out`, the portable kernel (a kernel set
+/// may override it, `kernels::KernelSet::tail_row`). Every row is as long
+/// as `m_d` (the engine's are); should one be shorter, nothing is written.
 #[inline(always)]
-pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
-    // The M4F's magnitudes: a loop each, in assembly (`m4`).
-    #[cfg(fpu_f32)]
-    if let TailOut {
-        m: [m_d, m_c],
-        fields: None,
-    } = out
-    {
-        let TailRows {
-            abc: [a, b, c],
-            pq: [p, q],
-            v: [vx, vy],
-        } = *rows;
-        let units = [k.units.det_floor, k.units.v_d];
-        crate::kernels::m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
-        crate::kernels::m4::curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
-        return;
-    }
-    tail_row_portable(k, rows, out);
-}
-
-/// [`tail_row`] in portable code on every target.
-#[inline(always)]
-pub(crate) fn tail_row_portable(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
+pub(crate) fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
     let TailRows {
         abc: [a, b, c],
         pq: [p, q],

@@ -23,7 +23,7 @@ mod m4 {
     use crate::kernels::wide_products;
     use crate::sink::portable_rgb_tail;
     use crate::stages::{binomial_of, running_binomial, sliding_binomial, vertical_parts_of};
-    use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
+    use crate::tail::{TailConstants, TailOut, TailRows, tail_row as tail_row_portable};
     use crate::{ByteScale, Config, IntensityScale, Params};
     use fixed::types::U16F16;
 

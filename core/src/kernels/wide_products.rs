@@ -28,6 +28,7 @@ use crate::stages::{DN_SCALE, ResidualInputs, ScratchRows, cut, cut_mut};
 /// rows the memory
 /// cannot serve (never, once an engine has validated it) leave them
 /// untouched.
+#[cfg_attr(not(fpu_f32), allow(dead_code))] // the M4 set's; tested everywhere
 pub(crate) fn products_row(
     input: &ResidualInputs<'_>,
     [xx, xy, yy]: [&mut [i32]; 3],
