@@ -23,7 +23,7 @@ use crate::stages::{
     boundary_minus_domain, smooth, structure_row,
 };
 use crate::tail::{TailConstants, TailOut};
-use crate::{Config, Error, Fields, Job, Pixels, Tile};
+use crate::{Config, Error, ExtremesSink, Fields, Job, Pixels, Tile};
 
 /// Where output goes: one call per output row of a tile, in top-to-bottom
 /// order within the tile.
@@ -51,13 +51,15 @@ pub trait Sink {
         None
     }
 
-    /// The magnitudes of pixels `[x, x + luma.len())` of frame row `y` are
-    /// in the rows [`Sink::magnitude_rows`] gave; `luma` is their `fⁿ`.
-    /// `extremes`: the two rows' extremes, where the engine found them as
-    /// it wrote them (its AVX2 tail), so a sink that keeps the frame's
-    /// extremes merges these instead of reading the rows again; `None`
-    /// where the engine did not.
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<crate::ExtremesSink>) {
+    /// The magnitudes `|v_d|, |v_c|` of pixels `[x, x + luma.len())` of
+    /// frame row `y` are in the rows [`Sink::magnitude_rows`] gave; `luma`
+    /// is their `fⁿ`, and `extremes` the least and greatest value of each
+    /// of the two rows, which SPEC §4's per-frame min–max reads over the
+    /// frame: a sink that keeps them merges these
+    /// ([`ExtremesSink::merge`](crate::ExtremesSink::merge)) instead of
+    /// reading the rows again (every kernel set gives them; some find them
+    /// as they write the rows).
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: ExtremesSink) {
         let _ = (y, x, luma, extremes);
     }
 }
@@ -79,7 +81,7 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     }
 
     #[inline(always)]
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<crate::ExtremesSink>) {
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: ExtremesSink) {
         (**self).kept_row(y, x, luma, extremes)
     }
 }
@@ -603,9 +605,13 @@ impl<K: KernelSet> Pass<'_, K> {
         };
         if !reads_fields {
             let (y, x) = at();
-            if let Some(m) = sink.magnitude_rows(y, x, width) {
-                let out = TailOut { m, fields: None };
-                let extremes = rows.sums.tail_row::<K>(o, products, v, &constants, out, n);
+            if let Some([m_d, m_c]) = sink.magnitude_rows(y, x, width) {
+                let out = TailOut {
+                    m: [&mut *m_d, &mut *m_c],
+                    fields: None,
+                };
+                let found = rows.sums.tail_row::<K>(o, products, v, &constants, out, n);
+                let extremes = found.unwrap_or_else(|| ExtremesSink::of_rows(m_d, m_c));
                 let luma = first(from_first_output(rows.p0.row(o)), width);
                 sink.kept_row(y, x, luma, extremes);
                 return;

@@ -228,6 +228,14 @@ pub struct ExtremesSink {
 }
 
 impl ExtremesSink {
+    /// The extremes of the magnitudes of a row segment.
+    pub(crate) fn of_rows(m_d: &[f32], m_c: &[f32]) -> Self {
+        let mut extremes = Self::default();
+        extremes.m_d.add_all(m_d);
+        extremes.m_c.add_all(m_c);
+        extremes
+    }
+
     /// Merge the extremes of another part of the frame.
     pub fn merge(&mut self, other: ExtremesSink) {
         self.m_d.merge(other.m_d);
