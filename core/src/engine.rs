@@ -373,7 +373,7 @@ impl<'m, K: KernelSet> Rows<'m, K> {
         Self {
             int_products: take_rows(words, cols),
             float_products: take_rows(floats, cols),
-            sums: kernels.carve_sums(words, floats, cols),
+            sums: K::Sums::carve(kernels, words, floats, cols),
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
             e_scratch: take_rows(words, cols),
@@ -569,7 +569,7 @@ impl<K: KernelSet> Pass<'_, K> {
             };
             structure_row::<K>(&input, structure, n);
             let products = (&mut rows.int_products, &mut rows.float_products);
-            rows.sums.store_row::<K>(j, products, n);
+            rows.sums.store_row(j, products, n);
         }
         if t >= OUTPUT_START {
             self.emit(config, t - OUTPUT_LAG, sink);
@@ -610,7 +610,7 @@ impl<K: KernelSet> Pass<'_, K> {
                     m: [&mut *m_d, &mut *m_c],
                     fields: None,
                 };
-                let found = rows.sums.tail_row::<K>(o, products, v, &constants, out, n);
+                let found = rows.sums.tail_row(o, products, v, &constants, out, n);
                 let extremes = found.unwrap_or_else(|| ExtremesSink::of_rows(m_d, m_c));
                 let luma = first(from_first_output(rows.p0.row(o)), width);
                 sink.kept_row(y, x, luma, extremes);
@@ -622,7 +622,7 @@ impl<K: KernelSet> Pass<'_, K> {
             m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
             fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
         };
-        rows.sums.tail_row::<K>(o, products, v, &constants, out, n);
+        rows.sums.tail_row(o, products, v, &constants, out, n);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
         let pixels = Pixels {

@@ -75,20 +75,6 @@ impl Job<'_> {
 /// ([`BlockedSums`]) and the tail in lanes.
 impl KernelSet for Avx2 {
     type Sums<'m> = BlockedSums<'m>;
-
-    #[inline(always)]
-    fn carve_sums<'m>(
-        self,
-        words: &mut &'m mut [i32],
-        floats: &mut &'m mut [f32],
-        cols: usize,
-    ) -> BlockedSums<'m> {
-        BlockedSums {
-            avx2: self,
-            ints: take(words, SUM_DEPTH * INT_CHANNELS * cols),
-            floats: take(floats, SUM_DEPTH * FLOAT_CHANNELS * cols),
-        }
-    }
 }
 
 /// The sums' rings in blocks (module doc): the integer channels' ring and
@@ -100,9 +86,23 @@ pub(crate) struct BlockedSums<'m> {
     floats: &'m mut [f32],
 }
 
-impl<'m> SumRings<'m> for BlockedSums<'m> {
+impl<'m> SumRings<'m, Avx2> for BlockedSums<'m> {
     #[inline(always)]
-    fn store_row<K: KernelSet>(&mut self, t: usize, (ints, floats): Products<'_, 'm>, n: usize) {
+    fn carve(
+        avx2: Avx2,
+        words: &mut &'m mut [i32],
+        floats: &mut &'m mut [f32],
+        cols: usize,
+    ) -> Self {
+        Self {
+            avx2,
+            ints: take(words, SUM_DEPTH * INTS * cols),
+            floats: take(floats, SUM_DEPTH * FLOATS * cols),
+        }
+    }
+
+    #[inline(always)]
+    fn store_row(&mut self, t: usize, (ints, floats): Products<'_, 'm>, n: usize) {
         let ints = ints.each_ref().map(|row| &row[..]);
         let floats = floats.each_ref().map(|row| &row[..]);
         let rings = (&mut *self.ints, &mut *self.floats, t % SUM_DEPTH);
@@ -111,7 +111,7 @@ impl<'m> SumRings<'m> for BlockedSums<'m> {
 
     /// The vertical `G` is the tail's own, from the blocks.
     #[inline(always)]
-    fn tail_row<K: KernelSet>(
+    fn tail_row(
         &mut self,
         o: usize,
         _: Products<'_, 'm>,

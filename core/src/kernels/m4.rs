@@ -36,16 +36,6 @@ impl KernelSet for M4 {
     type Sums<'m> = PlanarSums<'m>;
 
     #[inline(always)]
-    fn carve_sums<'m>(
-        self,
-        words: &mut &'m mut [i32],
-        floats: &mut &'m mut [f32],
-        cols: usize,
-    ) -> PlanarSums<'m> {
-        PlanarSums::carve(words, floats, cols)
-    }
-
-    #[inline(always)]
     fn binomial_rows_i32(rows: [&[i32]; 5], out: &mut [i32]) {
         binomial_i32(rows, out);
     }

@@ -54,17 +54,7 @@ pub(crate) type Products<'a, 'm> = (
 pub(crate) trait KernelSet: Copy {
     /// How the structure sums' rings lie in memory ([`PlanarSums`]: a row
     /// per channel, the portable layout).
-    type Sums<'m>: SumRings<'m>;
-
-    /// The sums' rings of windows of `cols` columns, the integer ones from
-    /// `words` and the `f32` ones from `floats` (`SUM_DEPTH · cols` values
-    /// per channel either way).
-    fn carve_sums<'m>(
-        self,
-        words: &mut &'m mut [i32],
-        floats: &mut &'m mut [f32],
-        cols: usize,
-    ) -> Self::Sums<'m>;
+    type Sums<'m>: SumRings<'m, Self>;
 
     /// The vertical binomial of exact sums (`stages::binomial_of`) on the
     /// scalar boards.
@@ -139,20 +129,30 @@ pub(crate) trait KernelSet: Copy {
     }
 }
 
-/// The structure sums' rings as a kernel set lays them out: the engine
-/// stores each structure row's horizontal sums in them and reads them back
-/// for an output row's tail.
-pub(crate) trait SumRings<'m> {
+/// The structure sums' rings as the kernel set `K` lays them out: the
+/// engine stores each structure row's horizontal sums in them and reads
+/// them back for an output row's tail.
+pub(crate) trait SumRings<'m, K: KernelSet>: Sized {
+    /// The rings of windows of `cols` columns, the integer ones from
+    /// `words` and the `f32` ones from `floats` (`SUM_DEPTH · cols` values
+    /// per channel either way).
+    fn carve(
+        kernels: K,
+        words: &mut &'m mut [i32],
+        floats: &mut &'m mut [f32],
+        cols: usize,
+    ) -> Self;
+
     /// The horizontal `G` of the five product rows (window columns, valid
     /// on `[5, n − 5)`) into window row `t` of the rings, on `[7, n − 7)`.
-    fn store_row<K: KernelSet>(&mut self, t: usize, products: Products<'_, 'm>, n: usize);
+    fn store_row(&mut self, t: usize, products: Products<'_, 'm>, n: usize);
 
     /// The tail of window row `o` (`o ≥ 7`): the vertical `G` of the five
     /// sums rows centred on it (into the product rows, free by then, where
     /// the layout needs them there), the solve and `out`. `v` is `V` of the
     /// row. The two magnitude rows' extremes where the set found them as it
     /// wrote them, `None` where it did not.
-    fn tail_row<K: KernelSet>(
+    fn tail_row(
         &mut self,
         o: usize,
         products: Products<'_, 'm>,
@@ -169,24 +169,18 @@ pub(crate) struct PlanarSums<'m> {
     floats: [RowRing<'m, f32, SUM_DEPTH>; FLOAT_CHANNELS],
 }
 
-impl<'m> PlanarSums<'m> {
+impl<'m, K: KernelSet> SumRings<'m, K> for PlanarSums<'m> {
     /// A ring per channel, rows `cols` long.
     #[inline(always)]
-    pub(crate) fn carve(
-        words: &mut &'m mut [i32],
-        floats: &mut &'m mut [f32],
-        cols: usize,
-    ) -> Self {
+    fn carve(_: K, words: &mut &'m mut [i32], floats: &mut &'m mut [f32], cols: usize) -> Self {
         Self {
             ints: core::array::from_fn(|_| RowRing::carve(words, cols)),
             floats: core::array::from_fn(|_| RowRing::carve(floats, cols)),
         }
     }
-}
 
-impl<'m> SumRings<'m> for PlanarSums<'m> {
     #[inline(always)]
-    fn store_row<K: KernelSet>(&mut self, t: usize, (ints, floats): Products<'_, 'm>, n: usize) {
+    fn store_row(&mut self, t: usize, (ints, floats): Products<'_, 'm>, n: usize) {
         for (row, ring) in ints.iter().zip(self.ints.iter_mut()) {
             horizontal_binomial::<K, _>(row, ring.row_mut(t), n, 7);
         }
@@ -196,7 +190,7 @@ impl<'m> SumRings<'m> for PlanarSums<'m> {
     }
 
     #[inline(always)]
-    fn tail_row<K: KernelSet>(
+    fn tail_row(
         &mut self,
         o: usize,
         (ints, floats): Products<'_, 'm>,
@@ -234,16 +228,6 @@ pub(crate) struct Portable;
 
 impl KernelSet for Portable {
     type Sums<'m> = PlanarSums<'m>;
-
-    #[inline(always)]
-    fn carve_sums<'m>(
-        self,
-        words: &mut &'m mut [i32],
-        floats: &mut &'m mut [f32],
-        cols: usize,
-    ) -> PlanarSums<'m> {
-        PlanarSums::carve(words, floats, cols)
-    }
 }
 
 /// The set this target's firmware runs, fixed at compile time: the
