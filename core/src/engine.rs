@@ -12,7 +12,7 @@
 //! Because each stage depends only on its inputs, not on where the window
 //! starts, every tiling yields the same bytes as one whole-frame window.
 
-use crate::kernels::{KernelSet, Native, SumRings, WithKernels, from_first_output};
+use crate::kernels::{KernelSet, Native, OutputRow, SumRings, WithKernels, from_first_output};
 use crate::ring::{RowRing, take_rows};
 use crate::schedule::{
     D_DEPTH, E_DEPTH, E_LAG, E_RADIUS, E_START, HALO, OUTPUT_LAG, OUTPUT_START, P0_DEPTH,
@@ -588,11 +588,16 @@ impl<K: KernelSet> Pass<'_, K> {
         let rows = &mut self.rows;
         let reads_fields = sink.reads_fields();
         let width = n.saturating_sub(2 * HALO);
-        let v = [rows.v[0].row(o), rows.v[1].row(o)];
-        let products = (&mut rows.int_products, &mut rows.float_products);
         let constants = TailConstants {
             lambda4: config.lambda4,
             units: config.units(),
+        };
+        let row = OutputRow {
+            o,
+            n,
+            products: (&mut rows.int_products, &mut rows.float_products),
+            v: [rows.v[0].row(o), rows.v[1].row(o)],
+            constants: &constants,
         };
         // The row's place in the frame, worked out where each call needs it:
         // held across the tail, it cost the M4 registers (445 → 451 per
@@ -610,7 +615,7 @@ impl<K: KernelSet> Pass<'_, K> {
                     m: [&mut *m_d, &mut *m_c],
                     fields: None,
                 };
-                let found = rows.sums.tail_row(o, products, v, &constants, out, n);
+                let found = rows.sums.tail_row(row, out);
                 let extremes = found.unwrap_or_else(|| ExtremesSink::of_rows(m_d, m_c));
                 let luma = first(from_first_output(rows.p0.row(o)), width);
                 sink.kept_row(y, x, luma, extremes);
@@ -622,7 +627,7 @@ impl<K: KernelSet> Pass<'_, K> {
             m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
             fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
         };
-        rows.sums.tail_row(o, products, v, &constants, out, n);
+        rows.sums.tail_row(row, out);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
         let pixels = Pixels {

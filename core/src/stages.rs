@@ -52,14 +52,18 @@ pub trait Sample: Copy + Default + Add<Output = Self> {
     /// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
     fn binomial(a: Self, b: Self, c: Self, d: Self, e: Self) -> Self;
 
-    /// [`Sample::binomial`] of every column of five rows on the scalar
-    /// boards (`out.len()` columns; shorter rows leave `out` untouched):
-    /// the set's kernel for this kind of sum.
-    fn binomial_rows<K: KernelSet>(rows: [&[Self]; 5], out: &mut [Self]);
+    /// The set's kernel for this kind of sum (on the scalar boards).
+    fn binomial_kernel<K: KernelSet>(binomial: Binomial<'_, Self>);
+}
 
-    /// The horizontal binomial of `out.len() + 4` taps on the scalar
-    /// boards: the set's kernel for this kind of sum.
-    fn binomial_taps<K: KernelSet>(taps: &[Self], out: &mut [Self]);
+/// A binomial a kernel set computes, on the scalar boards (shorter rows
+/// leave `out` untouched).
+pub enum Binomial<'a, T> {
+    /// [`Sample::binomial`] of every column of five rows, `out.len()`
+    /// columns (the vertical one).
+    Rows([&'a [T]; 5], &'a mut [T]),
+    /// The horizontal one of `out.len() + 4` taps.
+    Taps(&'a [T], &'a mut [T]),
 }
 
 impl Sample for i32 {
@@ -69,13 +73,8 @@ impl Sample for i32 {
     }
 
     #[inline(always)]
-    fn binomial_rows<K: KernelSet>(rows: [&[i32]; 5], out: &mut [i32]) {
-        K::binomial_rows_i32(rows, out);
-    }
-
-    #[inline(always)]
-    fn binomial_taps<K: KernelSet>(taps: &[i32], out: &mut [i32]) {
-        K::binomial_taps_i32(taps, out);
+    fn binomial_kernel<K: KernelSet>(binomial: Binomial<'_, i32>) {
+        K::binomial_exact(binomial);
     }
 }
 
@@ -88,13 +87,8 @@ impl Sample for f32 {
     }
 
     #[inline(always)]
-    fn binomial_rows<K: KernelSet>(rows: [&[f32]; 5], out: &mut [f32]) {
-        K::binomial_rows_f32(rows, out);
-    }
-
-    #[inline(always)]
-    fn binomial_taps<K: KernelSet>(taps: &[f32], out: &mut [f32]) {
-        K::binomial_taps_f32(taps, out);
+    fn binomial_kernel<K: KernelSet>(binomial: Binomial<'_, f32>) {
+        K::binomial_float(binomial);
     }
 }
 
@@ -124,7 +118,7 @@ pub(crate) fn vertical_binomial<K: KernelSet, T: Sample>(
     if crate::VECTOR_ROWS {
         binomial_of(a, b, c, d, e, opaque(out));
     } else {
-        T::binomial_rows::<K>([a, b, c, d, e], out);
+        T::binomial_kernel::<K>(Binomial::Rows([a, b, c, d, e], out));
     }
 }
 
@@ -144,15 +138,7 @@ pub(crate) fn vertical_binomial<K: KernelSet, T: Sample>(
 #[cfg_attr(not(dispatched_pass), inline(never))]
 pub(crate) fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
     let len = out.len();
-    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
-        a.get(..len),
-        b.get(..len),
-        c.get(..len),
-        d.get(..len),
-        e.get(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => a, b, c, d, e);
     for i in 0..len {
         out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
     }
@@ -179,7 +165,7 @@ pub(crate) fn horizontal_binomial<K: KernelSet, T: Sample>(
     if crate::VECTOR_ROWS {
         tapped_binomial(row, first, out);
     } else if let Some(taps) = cut(row, first, len + 4) {
-        T::binomial_taps::<K>(taps, out);
+        T::binomial_kernel::<K>(Binomial::Taps(taps, out));
     }
 }
 
@@ -274,19 +260,8 @@ fn vertical_parts<K: KernelSet>(
     v4: &mut [i16],
     cols: core::ops::Range<usize>,
 ) {
-    let (start, len) = (cols.start, cols.len());
-    let [d0, d1, d2, d3, d4] = d.map(|row| cut(row, start, len));
-    let (Some(d0), Some(d1), Some(d2), Some(d3), Some(d4)) = (d0, d1, d2, d3, d4) else {
-        return;
-    };
-    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
-        cut_mut(v1, start, len),
-        cut_mut(v2, start, len),
-        cut_mut(v3, start, len),
-        cut_mut(v4, start, len),
-    ) else {
-        return;
-    };
+    let [d0, d1, d2, d3, d4] = d;
+    cut_rows!(cols.start, cols.len() => d0, d1, d2, d3, d4; mut v1, v2, v3, v4);
     if K::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
         return;
     }
@@ -305,19 +280,7 @@ pub(crate) fn vertical_parts_of(
     v4: &mut [i16],
 ) {
     let len = d0.len();
-    let (Some(d1), Some(d2), Some(d3), Some(d4)) =
-        (d1.get(..len), d2.get(..len), d3.get(..len), d4.get(..len))
-    else {
-        return;
-    };
-    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
-        v1.get_mut(..len),
-        v2.get_mut(..len),
-        v3.get_mut(..len),
-        v4.get_mut(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => d1, d2, d3, d4; mut v1, v2, v3, v4);
     for i in 0..len {
         let (a, b, c, dd, ee) = (d0[i], d1[i], d2[i], d3[i], d4[i]);
         v1[i] = b + 4 * c + dd;
@@ -387,27 +350,7 @@ fn component_of(
     out: &mut [i32],
 ) {
     let len = out.len();
-    fn cut(tap: &[i16], len: usize) -> Option<&[i16]> {
-        tap.get(..len)
-    }
-    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
-        cut(a, len),
-        cut(b, len),
-        cut(c, len),
-        cut(d, len),
-        cut(e, len),
-    ) else {
-        return;
-    };
-    let (Some(f), Some(g), Some(h), Some(i), Some(j)) = (
-        cut(f, len),
-        cut(g, len),
-        cut(h, len),
-        cut(i, len),
-        cut(j, len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => a, b, c, d, e, f, g, h, i, j);
     for k in 0..len {
         out[k] = formula(
             [a[k], b[k], c[k], d[k], e[k]],
@@ -623,45 +566,63 @@ pub(crate) fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut
     row.get_mut(start..)?.get_mut(..len)
 }
 
+/// Each named row (a local slice) [`cut`] to `len` elements from `start`
+/// (its first `len` without one), and each after `mut` likewise to be
+/// written, or a return from the function where one is shorter (never,
+/// for the engine's rows): the row loops' one way to know their rows'
+/// lengths.
+macro_rules! cut_rows {
+    ($len:expr => $($row:ident),* $(; mut $($out:ident),+)?) => {
+        let len: usize = $len;
+        $(let Some($row) = $row.get(..len) else { return; };)*
+        $($(let Some($out) = $out.get_mut(..len) else { return; };)+)?
+    };
+    ($start:expr, $len:expr => $($row:ident),* $(; mut $($out:ident),+)?) => {
+        let (start, len): (usize, usize) = ($start, $len);
+        $(let Some($row) = $crate::stages::cut($row, start, len) else { return; };)*
+        $($(let Some($out) = $crate::stages::cut_mut($out, start, len) else { return; };)+)?
+    };
+}
+pub(crate) use cut_rows;
+
 /// The row shifted by `−2 … +2` around `len` columns from `start` (tap `k`
 /// of column `i` is element `start + i + k − 2`), each [`cut`] to `len`.
 #[inline(always)]
 fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
-    let first = start.checked_sub(2)?;
+    let [a, b, c] = taps3(row, start.checked_sub(2)?, len)?;
+    let first = start + 1;
+    Some([a, b, c, cut(row, first, len)?, cut(row, first + 1, len)?])
+}
+
+/// The row shifted by `−1 … +1` around `len` columns from `first + 1`,
+/// each [`cut`] to `len`.
+#[inline(always)]
+fn taps3<T>(row: &[T], first: usize, len: usize) -> Option<[&[T]; 3]> {
+    let next = first.wrapping_add(1);
     Some([
         cut(row, first, len)?,
-        cut(row, first + 1, len)?,
-        cut(row, first + 2, len)?,
-        cut(row, first + 3, len)?,
-        cut(row, first + 4, len)?,
+        cut(row, next, len)?,
+        cut(row, next.wrapping_add(1), len)?,
     ])
 }
 
 /// The five products on columns `cols`: the product rows cut to them, then
 /// the set's kernel ([`portable_products_row`] by default).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn products_row<K: KernelSet>(
     input: &ResidualInputs<'_>,
-    xx: &mut [i32],
-    xy: &mut [i32],
-    yy: &mut [i32],
-    xd: &mut [f32],
-    yd: &mut [f32],
+    [xx, xy, yy]: [&mut [i32]; 3],
+    [xd, yd]: [&mut [f32]; 2],
     scratch: ScratchRows<'_>,
     cols: core::ops::Range<usize>,
 ) {
-    let (start, len) = (cols.start, cols.len());
-    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        cut_mut(xx, start, len),
-        cut_mut(xy, start, len),
-        cut_mut(yy, start, len),
-        cut_mut(xd, start, len),
-        cut_mut(yd, start, len),
-    ) else {
-        return;
+    cut_rows!(cols.start, cols.len() => ; mut xx, xy, yy, xd, yd);
+    let rows = ProductRows {
+        ints: [xx, xy, yy],
+        floats: [xd, yd],
+        scratch,
     };
-    K::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
+    K::products_row(input, rows, cols);
 }
 
 /// [`products_row`]'s portable kernel, into product rows already cut to
@@ -669,11 +630,8 @@ fn products_row<K: KernelSet>(
 #[inline(always)]
 pub(crate) fn portable_products_row(
     input: &ResidualInputs<'_>,
-    xx: &mut [i32],
-    xy: &mut [i32],
-    yy: &mut [i32],
-    xd: &mut [f32],
-    yd: &mut [f32],
+    [xx, xy, yy]: [&mut [i32]; 3],
+    [xd, yd]: [&mut [f32]; 2],
     cols: core::ops::Range<usize>,
 ) {
     let ResidualInputs {
@@ -686,38 +644,20 @@ pub(crate) fn portable_products_row(
     } = *input;
     // Every row cut to exactly the columns (shifted rows one either side),
     // then indexed: a counted loop with no bounds left to check.
-    let len = cols.len();
-    let first = cols.start.wrapping_sub(1);
-    let at = |row, shift| cut::<i32>(row, first.wrapping_add(shift), len);
-    let at8 = |row, shift| cut::<u8>(row, first.wrapping_add(shift), len);
-    let (Some(vx_l), Some(vx_c), Some(vx_r), Some(vy_u), Some(vy_c), Some(vy_d)) = (
-        at(vx, 0),
-        at(vx, 1),
-        at(vx, 2),
-        at(vy_up, 1),
-        at(vy, 1),
-        at(vy_down, 1),
-    ) else {
+    let (start, len) = (cols.start, cols.len());
+    let first = start.wrapping_sub(1);
+    let (Some([vx_l, vx_c, vx_r]), Some([pu0, pu1, pu2])) =
+        (taps3(vx, first, len), taps3(p_up, first, len))
+    else {
         return;
     };
-    let (Some(pu0), Some(pu1), Some(pu2), Some(pm0), Some(pm1), Some(pm2)) = (
-        at8(p_up, 0),
-        at8(p_up, 1),
-        at8(p_up, 2),
-        at8(p_mid, 0),
-        at8(p_mid, 1),
-        at8(p_mid, 2),
-    ) else {
+    let (Some([pm0, pm1, pm2]), Some([pd0, pd1, pd2])) =
+        (taps3(p_mid, first, len), taps3(p_down, first, len))
+    else {
         return;
     };
-    let (Some(pd0), Some(pd1), Some(pd2), Some(d)) = (
-        at8(p_down, 0),
-        at8(p_down, 1),
-        at8(p_down, 2),
-        cut(d, cols.start, len),
-    ) else {
-        return;
-    };
+    let (vy_u, vy_c, vy_d) = (vy_up, vy, vy_down);
+    cut_rows!(start, len => vy_u, vy_c, vy_d, d);
     products_of(
         (kappa, shift),
         vx_l,
@@ -776,44 +716,9 @@ fn products_of(
     yd: &mut [f32],
 ) {
     let len = xx.len();
-    fn first<T>(row: &[T], len: usize) -> Option<&[T]> {
-        row.get(..len)
-    }
-    let words = |row| first::<i32>(row, len);
-    let bytes = |row| first::<u8>(row, len);
-    let (Some(vx_l), Some(vx_c), Some(vx_r), Some(vy_u), Some(vy_c), Some(vy_d)) = (
-        words(vx_l),
-        words(vx_c),
-        words(vx_r),
-        words(vy_u),
-        words(vy_c),
-        words(vy_d),
-    ) else {
-        return;
-    };
-    let (Some(pu0), Some(pu1), Some(pu2), Some(pm0), Some(pm1), Some(pm2)) = (
-        bytes(pu0),
-        bytes(pu1),
-        bytes(pu2),
-        bytes(pm0),
-        bytes(pm1),
-        bytes(pm2),
-    ) else {
-        return;
-    };
-    let (Some(pd0), Some(pd1), Some(pd2), Some(d)) =
-        (bytes(pd0), bytes(pd1), bytes(pd2), d.get(..len))
-    else {
-        return;
-    };
-    let (Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        xy.get_mut(..len),
-        yy.get_mut(..len),
-        xd.get_mut(..len),
-        yd.get_mut(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => vx_l, vx_c, vx_r, vy_u, vy_c, vy_d,
+        pu0, pu1, pu2, pm0, pm1, pm2, pd0, pd1, pd2, d;
+        mut xy, yy, xd, yd);
     for i in 0..len {
         let (vx_l, vx_c, vx_r) = (vx_l[i], vx_c[i], vx_r[i]);
         let (vy_u, vy_c, vy_d) = (vy_u[i], vy_c[i], vy_d[i]);
@@ -850,6 +755,17 @@ pub struct ScratchRows<'a> {
     pub low: &'a mut [i32],
 }
 
+/// The product rows of one structure row cut to its columns, and the rows
+/// for intermediate values: what a kernel set's products write.
+pub struct ProductRows<'a> {
+    /// `X², XY, Y²`.
+    pub ints: [&'a mut [i32]; INT_CHANNELS],
+    /// `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰`.
+    pub floats: [&'a mut [f32]; FLOAT_CHANNELS],
+    /// Rows for the intermediate values.
+    pub scratch: ScratchRows<'a>,
+}
+
 /// The products' rows of one structure row: the exact integer channels
 /// and the `f32` ones.
 pub struct StructureRows<'a, 'm> {
@@ -876,7 +792,7 @@ pub fn structure_row<K: KernelSet>(
     } = rows;
     let [xx, xy, yy] = int_products;
     let [xd, yd] = float_products;
-    products_row::<K>(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
+    products_row::<K>(input, [xx, xy, yy], [xd, yd], scratch, span(n, 5));
 }
 
 #[cfg(test)]

@@ -32,7 +32,7 @@
 
 use crate::kernels::fpu::sqrt;
 use crate::params::Units;
-use crate::stages::opaque;
+use crate::stages::{cut_rows, opaque};
 
 /// The rows the tail reads, each from the first output column: the
 /// structure sums `a, b, c` (exact integers) and `p, q` (`f32`), and `V`.
@@ -176,26 +176,8 @@ fn pixels_of<const FIELDS: bool>(
 ) {
     let n = m_d.len();
     let f = if FIELDS { n } else { 0 };
-    let (Some(a), Some(b), Some(c), Some(vx), Some(vy), Some(p), Some(q), Some(m_c)) = (
-        a.get(..n),
-        b.get(..n),
-        c.get(..n),
-        vx.get(..n),
-        vy.get(..n),
-        p.get(..n),
-        q.get(..n),
-        m_c.get_mut(..n),
-    ) else {
-        return;
-    };
-    let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
-        v_c_x.get_mut(..f),
-        v_c_y.get_mut(..f),
-        v_d_x.get_mut(..f),
-        v_d_y.get_mut(..f),
-    ) else {
-        return;
-    };
+    cut_rows!(n => a, b, c, vx, vy, p, q; mut m_c);
+    cut_rows!(f => ; mut v_c_x, v_c_y, v_d_x, v_d_y);
     for i in 0..n {
         let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
         let v = [vx[i] as f32, vy[i] as f32];

@@ -36,7 +36,7 @@ use core::arch::x86_64::{
     _mm256_slli_epi32, _mm256_sqrt_ps, _mm256_storeu_ps, _mm256_storeu_si256, _mm256_sub_ps,
 };
 
-use super::{KernelSet, Products, SumRings};
+use super::{KernelSet, OutputRow, Products, SumRings};
 use crate::ring::take;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{FLOAT_CHANNELS, INT_CHANNELS, Sample};
@@ -111,15 +111,10 @@ impl<'m> SumRings<'m, Avx2> for BlockedSums<'m> {
 
     /// The vertical `G` is the tail's own, from the blocks.
     #[inline(always)]
-    fn tail_row(
-        &mut self,
-        o: usize,
-        _: Products<'_, 'm>,
-        v: [&[i32]; 2],
-        constants: &TailConstants,
-        out: TailOut<'_>,
-        _: usize,
-    ) -> Option<ExtremesSink> {
+    fn tail_row(&mut self, row: OutputRow<'_, 'm>, out: TailOut<'_>) -> Option<ExtremesSink> {
+        let OutputRow {
+            o, v, constants, ..
+        } = row;
         let rows = BlockedRows {
             ints: self.ints,
             floats: self.floats,

@@ -22,9 +22,11 @@
 //! registers it names; one saves `r7` on the stack while it counts there.
 #![allow(unsafe_code)]
 
+use core::ops::Range;
+
 use super::{KernelSet, PlanarSums, wide_products};
 use crate::ByteScale;
-use crate::stages::{ResidualInputs, ScratchRows};
+use crate::stages::{Binomial, ProductRows, ResidualInputs};
 use crate::tail::{TailConstants, TailOut, TailRows};
 
 /// The M4F's and M7's set: the loops below, the structure products of
@@ -36,23 +38,19 @@ impl KernelSet for M4 {
     type Sums<'m> = PlanarSums<'m>;
 
     #[inline(always)]
-    fn binomial_rows_i32(rows: [&[i32]; 5], out: &mut [i32]) {
-        binomial_i32(rows, out);
+    fn binomial_exact(binomial: Binomial<'_, i32>) {
+        match binomial {
+            Binomial::Rows(rows, out) => binomial_i32(rows, out),
+            Binomial::Taps(taps, out) => running_binomial_i32(taps, out),
+        }
     }
 
     #[inline(always)]
-    fn binomial_rows_f32(rows: [&[f32]; 5], out: &mut [f32]) {
-        binomial_f32(rows, out);
-    }
-
-    #[inline(always)]
-    fn binomial_taps_i32(taps: &[i32], out: &mut [i32]) {
-        running_binomial_i32(taps, out);
-    }
-
-    #[inline(always)]
-    fn binomial_taps_f32(taps: &[f32], out: &mut [f32]) {
-        sliding_binomial_f32(taps, out);
+    fn binomial_float(binomial: Binomial<'_, f32>) {
+        match binomial {
+            Binomial::Rows(rows, out) => binomial_f32(rows, out),
+            Binomial::Taps(taps, out) => sliding_binomial_f32(taps, out),
+        }
     }
 
     #[inline(always)]
@@ -61,13 +59,12 @@ impl KernelSet for M4 {
     }
 
     #[inline(always)]
-    fn products_row(
-        input: &ResidualInputs<'_>,
-        ints: [&mut [i32]; 3],
-        floats: [&mut [f32]; 2],
-        scratch: ScratchRows<'_>,
-        cols: core::ops::Range<usize>,
-    ) {
+    fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
+        let ProductRows {
+            ints,
+            floats,
+            scratch,
+        } = rows;
         wide_products::products_row(input, ints, floats, scratch, cols);
     }
 

@@ -31,11 +31,14 @@ pub mod kernel_check;
 pub(crate) mod m4;
 pub(crate) mod wide_products;
 
+use core::ops::Range;
+
 use crate::ring::RowRing;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
-    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, binomial_of, horizontal_binomial,
-    portable_products_row, running_binomial, sliding_binomial, vertical_binomial,
+    Binomial, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, binomial_of,
+    horizontal_binomial, portable_products_row, running_binomial, sliding_binomial,
+    vertical_binomial,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink};
@@ -56,33 +59,25 @@ pub(crate) trait KernelSet: Copy {
     /// per channel, the portable layout).
     type Sums<'m>: SumRings<'m, Self>;
 
-    /// The vertical binomial of exact sums (`stages::binomial_of`) on the
-    /// scalar boards.
+    /// The binomials of exact sums on the scalar boards: the vertical one
+    /// (`stages::binomial_of`), the horizontal one as running sums (any
+    /// order of exact sums is the same value).
     #[inline(always)]
-    fn binomial_rows_i32(rows: [&[i32]; 5], out: &mut [i32]) {
-        let [a, b, c, d, e] = rows;
-        binomial_of(a, b, c, d, e, out);
+    fn binomial_exact(binomial: Binomial<'_, i32>) {
+        match binomial {
+            Binomial::Rows([a, b, c, d, e], out) => binomial_of(a, b, c, d, e, out),
+            Binomial::Taps(taps, out) => running_binomial(taps, out),
+        }
     }
 
-    /// The vertical binomial of `f32` sums on the scalar boards.
+    /// The binomials of `f32` sums on the scalar boards, both in the tapped
+    /// order (`f32` sums keep one order on every target).
     #[inline(always)]
-    fn binomial_rows_f32(rows: [&[f32]; 5], out: &mut [f32]) {
-        let [a, b, c, d, e] = rows;
-        binomial_of(a, b, c, d, e, out);
-    }
-
-    /// The horizontal binomial of `out.len() + 4` exact taps on the scalar
-    /// boards: running sums (any order of exact sums is the same value).
-    #[inline(always)]
-    fn binomial_taps_i32(taps: &[i32], out: &mut [i32]) {
-        running_binomial(taps, out);
-    }
-
-    /// The horizontal binomial of `f32` taps on the scalar boards, in the
-    /// tapped order (`f32` sums keep one order on every target).
-    #[inline(always)]
-    fn binomial_taps_f32(taps: &[f32], out: &mut [f32]) {
-        sliding_binomial(taps, out);
+    fn binomial_float(binomial: Binomial<'_, f32>) {
+        match binomial {
+            Binomial::Rows([a, b, c, d, e], out) => binomial_of(a, b, c, d, e, out),
+            Binomial::Taps(taps, out) => sliding_binomial(taps, out),
+        }
     }
 
     /// `E`'s four vertical parts (`stages::vertical_parts_of`), or `false`
@@ -97,15 +92,15 @@ pub(crate) trait KernelSet: Copy {
     /// cut to them (`stages::portable_products_row`); `scratch` is the
     /// engine's free rows for intermediate values.
     #[inline(always)]
-    fn products_row(
-        input: &ResidualInputs<'_>,
-        [xx, xy, yy]: [&mut [i32]; 3],
-        [xd, yd]: [&mut [f32]; 2],
-        scratch: ScratchRows<'_>,
-        cols: core::ops::Range<usize>,
-    ) {
+    fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
+        let ProductRows {
+            ints,
+            floats,
+            scratch,
+        } = rows;
+        // The portable loop needs no scratch rows.
         let _ = scratch;
-        portable_products_row(input, xx, xy, yy, xd, yd, cols);
+        portable_products_row(input, ints, floats, cols);
     }
 
     /// An output row's tail (`tail::tail_row`).
@@ -147,20 +142,26 @@ pub(crate) trait SumRings<'m, K: KernelSet>: Sized {
     /// on `[5, n − 5)`) into window row `t` of the rings, on `[7, n − 7)`.
     fn store_row(&mut self, t: usize, products: Products<'_, 'm>, n: usize);
 
-    /// The tail of window row `o` (`o ≥ 7`): the vertical `G` of the five
-    /// sums rows centred on it (into the product rows, free by then, where
-    /// the layout needs them there), the solve and `out`. `v` is `V` of the
-    /// row. The two magnitude rows' extremes where the set found them as it
-    /// wrote them, `None` where it did not.
-    fn tail_row(
-        &mut self,
-        o: usize,
-        products: Products<'_, 'm>,
-        v: [&[i32]; 2],
-        constants: &TailConstants,
-        out: TailOut<'_>,
-        n: usize,
-    ) -> Option<ExtremesSink>;
+    /// The tail of an output row: the vertical `G` of the five sums rows
+    /// centred on it (into the product rows, free by then, where the
+    /// layout needs them there), the solve and `out`. The two magnitude
+    /// rows' extremes where the set found them as it wrote them, `None`
+    /// where it did not.
+    fn tail_row(&mut self, row: OutputRow<'_, 'm>, out: TailOut<'_>) -> Option<ExtremesSink>;
+}
+
+/// What an output row's tail reads besides the sums' rings.
+pub(crate) struct OutputRow<'a, 'm> {
+    /// The window row (`o ≥ 7`).
+    pub o: usize,
+    /// The window's columns.
+    pub n: usize,
+    /// The product rows (window columns).
+    pub products: Products<'a, 'm>,
+    /// `V` of the row (window columns).
+    pub v: [&'a [i32]; 2],
+    /// What the tail needs of the configuration.
+    pub constants: &'a TailConstants,
 }
 
 /// The portable layout: a ring of rows per channel.
@@ -190,15 +191,14 @@ impl<'m, K: KernelSet> SumRings<'m, K> for PlanarSums<'m> {
     }
 
     #[inline(always)]
-    fn tail_row(
-        &mut self,
-        o: usize,
-        (ints, floats): Products<'_, 'm>,
-        v: [&[i32]; 2],
-        constants: &TailConstants,
-        out: TailOut<'_>,
-        n: usize,
-    ) -> Option<ExtremesSink> {
+    fn tail_row(&mut self, row: OutputRow<'_, 'm>, out: TailOut<'_>) -> Option<ExtremesSink> {
+        let OutputRow {
+            o,
+            n,
+            products: (ints, floats),
+            v,
+            constants,
+        } = row;
         for (ring, sums) in self.ints.iter().zip(ints.iter_mut()) {
             vertical_binomial::<K, _>(ring.rows(o - SUM_RADIUS), sums, n, HALO);
         }
