@@ -86,8 +86,8 @@ impl ByteScale {
 
     /// `[offset, gain]`: [`ByteScale::byte`] is `⌊t⌋` of
     /// `t = (m − offset) · gain + ½` (each operation rounded to `f32`)
-    /// clamped to `[0, 255]`, for a byte step written elsewhere (the host's
-    /// AVX2 one, the M4F's).
+    /// clamped to `[0, 255]`, for a byte step written elsewhere (the host's,
+    /// a kernel set's in `kernels/`).
     #[inline(always)]
     pub fn parts(&self) -> [f32; 2] {
         [self.offset, self.gain]

@@ -261,7 +261,8 @@ fn vertical_parts<K: KernelSet>(
     cols: core::ops::Range<usize>,
 ) {
     let [d0, d1, d2, d3, d4] = d;
-    cut_rows!(cols.start, cols.len() => d0, d1, d2, d3, d4; mut v1, v2, v3, v4);
+    cut_rows!(cols.start, cols.len() => d0, d1, d2, d3, d4);
+    cut_rows!(cols.start, cols.len() => ; mut v1, v2, v3, v4);
     if K::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
         return;
     }
@@ -280,7 +281,8 @@ pub(crate) fn vertical_parts_of(
     v4: &mut [i16],
 ) {
     let len = d0.len();
-    cut_rows!(len => d1, d2, d3, d4; mut v1, v2, v3, v4);
+    cut_rows!(len => d1, d2, d3, d4);
+    cut_rows!(len => ; mut v1, v2, v3, v4);
     for i in 0..len {
         let (a, b, c, dd, ee) = (d0[i], d1[i], d2[i], d3[i], d4[i]);
         v1[i] = b + 4 * c + dd;
@@ -350,7 +352,8 @@ fn component_of(
     out: &mut [i32],
 ) {
     let len = out.len();
-    cut_rows!(len => a, b, c, d, e, f, g, h, i, j);
+    cut_rows!(len => a, b, c, d, e);
+    cut_rows!(len => f, g, h, i, j);
     for k in 0..len {
         out[k] = formula(
             [a[k], b[k], c[k], d[k], e[k]],
@@ -574,13 +577,20 @@ pub(crate) fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut
 macro_rules! cut_rows {
     ($len:expr => $($row:ident),* $(; mut $($out:ident),+)?) => {
         let len: usize = $len;
-        $(let Some($row) = $row.get(..len) else { return; };)*
-        $($(let Some($out) = $out.get_mut(..len) else { return; };)+)?
+        let ($(Some($row),)* $($(Some($out),)+)?) =
+            ($($row.get(..len),)* $($($out.get_mut(..len),)+)?)
+        else {
+            return;
+        };
     };
     ($start:expr, $len:expr => $($row:ident),* $(; mut $($out:ident),+)?) => {
         let (start, len): (usize, usize) = ($start, $len);
-        $(let Some($row) = $crate::stages::cut($row, start, len) else { return; };)*
-        $($(let Some($out) = $crate::stages::cut_mut($out, start, len) else { return; };)+)?
+        let ($(Some($row),)* $($(Some($out),)+)?) = (
+            $($crate::stages::cut($row, start, len),)*
+            $($($crate::stages::cut_mut($out, start, len),)+)?
+        ) else {
+            return;
+        };
     };
 }
 pub(crate) use cut_rows;
@@ -589,20 +599,13 @@ pub(crate) use cut_rows;
 /// of column `i` is element `start + i + k − 2`), each [`cut`] to `len`.
 #[inline(always)]
 fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
-    let [a, b, c] = taps3(row, start.checked_sub(2)?, len)?;
-    let first = start + 1;
-    Some([a, b, c, cut(row, first, len)?, cut(row, first + 1, len)?])
-}
-
-/// The row shifted by `−1 … +1` around `len` columns from `first + 1`,
-/// each [`cut`] to `len`.
-#[inline(always)]
-fn taps3<T>(row: &[T], first: usize, len: usize) -> Option<[&[T]; 3]> {
-    let next = first.wrapping_add(1);
+    let first = start.checked_sub(2)?;
     Some([
         cut(row, first, len)?,
-        cut(row, next, len)?,
-        cut(row, next.wrapping_add(1), len)?,
+        cut(row, first + 1, len)?,
+        cut(row, first + 2, len)?,
+        cut(row, first + 3, len)?,
+        cut(row, first + 4, len)?,
     ])
 }
 
@@ -644,20 +647,38 @@ pub(crate) fn portable_products_row(
     } = *input;
     // Every row cut to exactly the columns (shifted rows one either side),
     // then indexed: a counted loop with no bounds left to check.
-    let (start, len) = (cols.start, cols.len());
-    let first = start.wrapping_sub(1);
-    let (Some([vx_l, vx_c, vx_r]), Some([pu0, pu1, pu2])) =
-        (taps3(vx, first, len), taps3(p_up, first, len))
-    else {
+    let len = cols.len();
+    let first = cols.start.wrapping_sub(1);
+    let at = |row, shift| cut::<i32>(row, first.wrapping_add(shift), len);
+    let at8 = |row, shift| cut::<u8>(row, first.wrapping_add(shift), len);
+    let (Some(vx_l), Some(vx_c), Some(vx_r), Some(vy_u), Some(vy_c), Some(vy_d)) = (
+        at(vx, 0),
+        at(vx, 1),
+        at(vx, 2),
+        at(vy_up, 1),
+        at(vy, 1),
+        at(vy_down, 1),
+    ) else {
         return;
     };
-    let (Some([pm0, pm1, pm2]), Some([pd0, pd1, pd2])) =
-        (taps3(p_mid, first, len), taps3(p_down, first, len))
-    else {
+    let (Some(pu0), Some(pu1), Some(pu2), Some(pm0), Some(pm1), Some(pm2)) = (
+        at8(p_up, 0),
+        at8(p_up, 1),
+        at8(p_up, 2),
+        at8(p_mid, 0),
+        at8(p_mid, 1),
+        at8(p_mid, 2),
+    ) else {
         return;
     };
-    let (vy_u, vy_c, vy_d) = (vy_up, vy, vy_down);
-    cut_rows!(start, len => vy_u, vy_c, vy_d, d);
+    let (Some(pd0), Some(pd1), Some(pd2), Some(d)) = (
+        at8(p_down, 0),
+        at8(p_down, 1),
+        at8(p_down, 2),
+        cut(d, cols.start, len),
+    ) else {
+        return;
+    };
     products_of(
         (kappa, shift),
         vx_l,
@@ -716,9 +737,10 @@ fn products_of(
     yd: &mut [f32],
 ) {
     let len = xx.len();
-    cut_rows!(len => vx_l, vx_c, vx_r, vy_u, vy_c, vy_d,
-        pu0, pu1, pu2, pm0, pm1, pm2, pd0, pd1, pd2, d;
-        mut xy, yy, xd, yd);
+    cut_rows!(len => vx_l, vx_c, vx_r, vy_u, vy_c, vy_d);
+    cut_rows!(len => pu0, pu1, pu2, pm0, pm1, pm2);
+    cut_rows!(len => pd0, pd1, pd2, d);
+    cut_rows!(len => ; mut xy, yy, xd, yd);
     for i in 0..len {
         let (vx_l, vx_c, vx_r) = (vx_l[i], vx_c[i], vx_r[i]);
         let (vy_u, vy_c, vy_d) = (vy_u[i], vy_c[i], vy_d[i]);
@@ -743,7 +765,7 @@ fn products_of(
 
 /// Rows a structure row may use for its intermediate values (the engine
 /// lends rows that are free at that point; a kernel set's products may use
-/// them, the M4F's do).
+/// them, `kernels/`).
 pub struct ScratchRows<'a> {
     /// `X`.
     pub gx: &'a mut [i16],

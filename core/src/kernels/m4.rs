@@ -60,12 +60,7 @@ impl KernelSet for M4 {
 
     #[inline(always)]
     fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
-        let ProductRows {
-            ints,
-            floats,
-            scratch,
-        } = rows;
-        wide_products::products_row(input, ints, floats, scratch, cols);
+        wide_products::products_row(input, rows.ints, rows.floats, rows.scratch, cols);
     }
 
     /// The magnitudes a loop each, in assembly; the fields' rows in the

@@ -93,14 +93,9 @@ pub(crate) trait KernelSet: Copy {
     /// engine's free rows for intermediate values.
     #[inline(always)]
     fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
-        let ProductRows {
-            ints,
-            floats,
-            scratch,
-        } = rows;
         // The portable loop needs no scratch rows.
-        let _ = scratch;
-        portable_products_row(input, ints, floats, cols);
+        let _ = rows.scratch;
+        portable_products_row(input, rows.ints, rows.floats, cols);
     }
 
     /// An output row's tail (`tail::tail_row`).
