@@ -6,12 +6,12 @@
 //! `tail`, `sink`), written once for every target. A target's set
 //! overrides the loops it has faster forms of, each computing exactly the
 //! values (and, in `f32`, the roundings in the order) of the portable one:
-//! - [`m4`] (with [`wide_products`]): the Cortex-M4F's and M7's hottest row
+//! - `m4` (with `wide_products`): the Cortex-M4F's and M7's hottest row
 //!   loops in `asm!`, chosen at compile time (`fpu_f32`), held equal to
 //!   their portable twins by `kernel_check` on the emulated boards;
-//! - [`avx2`]: the structure sums and the tail in AVX2 lanes for x86-64
+//! - `avx2`: the structure sums and the tail in AVX2 lanes for x86-64
 //!   hosts that find AVX2 and FMA at run time, chosen when a job is bound
-//!   ([`Job::with_avx2`](crate::Job::with_avx2)), held equal to the
+//!   (`Job::with_avx2`), held equal to the
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
 //!   in a layout of its own, which it names as its [`KernelSet::Sums`].
 //!
