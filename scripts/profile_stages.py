@@ -45,7 +45,7 @@ STAGES = [
     ("row", "– the bytes (`RgbSink`)", "emit"),
 ]
 
-# The core's AVX2 kernels (`core/src/avx2.rs`), out-of-line functions of
+# The core's AVX2 kernels (`core/src/kernels/avx2.rs`), out-of-line functions of
 # their own: (symbol part, their stage keys given the frames inlined there).
 KERNELS = [
     ("avx2::horizontal_sums_avx2", lambda frames: ["structure_row"]),
@@ -232,9 +232,12 @@ def stage_sums(binary, weights_list):
         elif "push" in frames:
             k = frames.index("push")
             if k + 1 < len(frames):
-                keys.append(frames[k + 1])
+                # The sums' rings take the products' horizontal G (`store_row`).
+                keys.append("structure_row" if frames[k + 1] == "store_row" else frames[k + 1])
                 if frames[k + 1] == "emit" and k + 2 < len(frames):
-                    keys.append("emit/" + frames[k + 2])
+                    # The portable layout's tail starts with the vertical G.
+                    part = "structure_sums" if "vertical_binomial" in frames[k + 2:] else frames[k + 2]
+                    keys.append("emit/" + part)
         stage_of[pc] = keys
     results = []
     for weights in weights_list:

@@ -12,19 +12,18 @@
 //! Because each stage depends only on its inputs, not on where the window
 //! starts, every tiling yields the same bytes as one whole-frame window.
 
-use crate::job::Kernels;
+use crate::kernels::{KernelSet, Native, OutputRow, SumRings, WithKernels, from_first_output};
 use crate::ring::{RowRing, take_rows};
 use crate::schedule::{
     D_DEPTH, E_DEPTH, E_LAG, E_RADIUS, E_START, HALO, OUTPUT_LAG, OUTPUT_START, P0_DEPTH,
-    PRODUCT_LAG, PRODUCT_RADIUS, PRODUCT_START, SUM_DEPTH, SUM_RADIUS, V_DEPTH, V_LAG, V_RADIUS,
-    V_START,
+    PRODUCT_LAG, PRODUCT_RADIUS, PRODUCT_START, SUM_DEPTH, V_DEPTH, V_LAG, V_RADIUS, V_START,
 };
 use crate::stages::{
-    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows, Sums,
-    boundary_minus_domain, smooth, structure_row, vertical_binomial,
+    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
+    boundary_minus_domain, smooth, structure_row,
 };
-use crate::tail::{TailConstants, TailOut, TailRows, tail_row};
-use crate::{Config, Error, Fields, Job, Pixels, Tile};
+use crate::tail::{TailConstants, TailOut};
+use crate::{Config, Error, ExtremesSink, Fields, Job, Pixels, Tile};
 
 /// Where output goes: one call per output row of a tile, in top-to-bottom
 /// order within the tile.
@@ -52,13 +51,15 @@ pub trait Sink {
         None
     }
 
-    /// The magnitudes of pixels `[x, x + luma.len())` of frame row `y` are
-    /// in the rows [`Sink::magnitude_rows`] gave; `luma` is their `fⁿ`.
-    /// `extremes`: the two rows' extremes, where the engine found them as
-    /// it wrote them (its AVX2 tail), so a sink that keeps the frame's
-    /// extremes merges these instead of reading the rows again; `None`
-    /// where the engine did not.
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<crate::ExtremesSink>) {
+    /// The magnitudes `|v_d|, |v_c|` of pixels `[x, x + luma.len())` of
+    /// frame row `y` are in the rows [`Sink::magnitude_rows`] gave; `luma`
+    /// is their `fⁿ`, and `extremes` the least and greatest value of each
+    /// of the two rows, which SPEC §4's per-frame min–max reads over the
+    /// frame: a sink that keeps them merges these
+    /// ([`ExtremesSink::merge`](crate::ExtremesSink::merge)) instead of
+    /// reading the rows again (every kernel set gives them; some find them
+    /// as they write the rows).
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: ExtremesSink) {
         let _ = (y, x, luma, extremes);
     }
 }
@@ -80,7 +81,7 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     }
 
     #[inline(always)]
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<crate::ExtremesSink>) {
+    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: ExtremesSink) {
         (**self).kept_row(y, x, luma, extremes)
     }
 }
@@ -334,10 +335,11 @@ impl<'m> SliceEngine<'m> {
     }
 }
 
-/// The engine's rows, carved from its memory for one window width.
-struct Rows<'m> {
+/// The engine's rows, carved from its memory for one window width, for
+/// the kernel set `K` (which lays out the structure sums).
+struct Rows<'m, K: KernelSet> {
     int_products: [&'m mut [i32]; INT_CHANNELS],
-    sums: SumRings<'m>,
+    sums: K::Sums<'m>,
     e: [RowRing<'m, i32, E_DEPTH>; 2],
     v: [RowRing<'m, i32, V_DEPTH>; 2],
     /// `E` before its horizontal smoothing (the ring keeps it smoothed).
@@ -352,144 +354,11 @@ struct Rows<'m> {
     p0: RowRing<'m, u8, P0_DEPTH>,
 }
 
-/// The rings of the five structure sums: a ring per channel, or with the
-/// AVX2 kernels (their token beside them) one ring for the integer channels
-/// and one for the `f32` ones, whose rows hold their channels in blocks
-/// (`avx2`'s layout; the same memory).
-enum SumRings<'m> {
-    Planar {
-        ints: [RowRing<'m, i32, SUM_DEPTH>; INT_CHANNELS],
-        floats: [RowRing<'m, f32, SUM_DEPTH>; FLOAT_CHANNELS],
-    },
-    /// Each ring's memory, `SUM_DEPTH · K · cols` values for `K` channels.
-    #[cfg(target_arch = "x86_64")]
-    Blocked {
-        avx2: crate::Avx2,
-        ints: &'m mut [i32],
-        floats: &'m mut [f32],
-    },
-}
-
-impl<'m> SumRings<'m> {
-    /// The rings of rows of `cols` values per channel, the integer ones
-    /// from `words` and the `f32` ones from `floats`; blocked where the job
-    /// runs the AVX2 kernels.
-    #[inline(always)]
-    fn carve(
-        words: &mut &'m mut [i32],
-        floats: &mut &'m mut [f32],
-        cols: usize,
-        kernels: Kernels,
-    ) -> Self {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(avx2) = kernels.avx2 {
-            return Self::Blocked {
-                avx2,
-                ints: crate::ring::take(words, SUM_DEPTH * INT_CHANNELS * cols),
-                floats: crate::ring::take(floats, SUM_DEPTH * FLOAT_CHANNELS * cols),
-            };
-        }
-        let _ = kernels;
-        Self::Planar {
-            ints: core::array::from_fn(|_| RowRing::carve(words, cols)),
-            floats: core::array::from_fn(|_| RowRing::carve(floats, cols)),
-        }
-    }
-
-    /// Row `t` of every channel's ring, or the blocked rings and its slot.
-    #[inline(always)]
-    fn row_mut(&mut self, t: usize) -> Sums<'_> {
-        match self {
-            Self::Planar { ints, floats } => Sums::Planar(
-                ints.each_mut().map(|ring| ring.row_mut(t)),
-                floats.each_mut().map(|ring| ring.row_mut(t)),
-            ),
-            #[cfg(target_arch = "x86_64")]
-            Self::Blocked { avx2, ints, floats } => {
-                Sums::Blocked(*avx2, ints, floats, t % SUM_DEPTH)
-            }
-        }
-    }
-}
-
-/// What the tail of output row `o` reads: the vertical sums (after
-/// [`Rows::structure_sums`]) and `V`, or with the AVX2 kernels the sums'
-/// blocked rings and `V` (the rows it reads, not the ones the tail writes).
-#[inline(always)]
-fn tail_input<'a>(
-    sums: &'a SumRings<'_>,
-    products: (
-        &'a [&mut [i32]; INT_CHANNELS],
-        &'a [&mut [f32]; FLOAT_CHANNELS],
-    ),
-    v: [&'a [i32]; 2],
-    o: usize,
-) -> TailInput<'a> {
-    #[cfg(target_arch = "x86_64")]
-    if let SumRings::Blocked { avx2, ints, floats } = sums {
-        let rows = crate::avx2::BlockedRows {
-            ints,
-            floats,
-            first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
-            v,
-        };
-        return TailInput::Blocked(*avx2, rows);
-    }
-    let _ = (sums, o);
-    TailInput::Planar(TailRows {
-        abc: products.0.each_ref().map(|row| from_first_output(row)),
-        pq: products.1.each_ref().map(|row| from_first_output(row)),
-        v: v.map(from_first_output),
-    })
-}
-
-/// What an output row's tail reads ([`tail_input`]).
-enum TailInput<'a> {
-    Planar(TailRows<'a>),
-    #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, crate::avx2::BlockedRows<'a>),
-}
-
-impl TailInput<'_> {
-    /// The tail of the row into `out`, and the extremes of the magnitudes
-    /// where the tail found them.
-    #[inline(always)]
-    fn run(&self, constants: &TailConstants, out: TailOut<'_>) -> Option<crate::ExtremesSink> {
-        match self {
-            Self::Planar(rows) => {
-                tail_row(constants, rows, out);
-                None
-            }
-            #[cfg(target_arch = "x86_64")]
-            Self::Blocked(avx2, rows) => Some(crate::avx2::tail_row(*avx2, constants, rows, out)),
-        }
-    }
-}
-
-impl<'m> Rows<'m> {
-    /// The vertical G of the five sums centred on window row `o`, into the
-    /// product rows (free by then), from rings a channel each.
-    #[inline(always)]
-    fn structure_sums(&mut self, o: usize, n: usize) {
-        match &self.sums {
-            SumRings::Planar { ints, floats } => {
-                for (ring, out) in ints.iter().zip(self.int_products.iter_mut()) {
-                    vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
-                }
-                for (ring, out) in floats.iter().zip(self.float_products.iter_mut()) {
-                    vertical_binomial(ring.rows(o - SUM_RADIUS), out, n, HALO);
-                }
-            }
-            // The AVX2 tail sums them itself.
-            #[cfg(target_arch = "x86_64")]
-            SumRings::Blocked { .. } => {}
-        }
-    }
-
+impl<'m, K: KernelSet> Rows<'m, K> {
     /// Rows of `cols` elements, in the order [`WORD_ROWS`] and its
     /// neighbours count them.
     #[inline(always)]
-    fn carve(planes: memory::Planes<'m>, cols: usize, kernels: Kernels) -> Self {
+    fn carve(planes: memory::Planes<'m>, cols: usize, kernels: K) -> Self {
         let memory::Planes {
             mut words,
             mut floats,
@@ -504,7 +373,7 @@ impl<'m> Rows<'m> {
         Self {
             int_products: take_rows(words, cols),
             float_products: take_rows(floats, cols),
-            sums: SumRings::carve(words, floats, cols, kernels),
+            sums: K::Sums::carve(kernels, words, floats, cols),
             e: core::array::from_fn(|_| RowRing::carve(words, cols)),
             v: core::array::from_fn(|_| RowRing::carve(words, cols)),
             e_scratch: take_rows(words, cols),
@@ -514,6 +383,22 @@ impl<'m> Rows<'m> {
             vert_d: take_rows(halves, cols),
             p0: RowRing::carve(&mut bytes, cols),
         }
+    }
+}
+
+/// One tile of a job, to run with the kernel set the job chose.
+struct TileWork<'e, 'j, M, S> {
+    engine: &'e mut TileEngine<M>,
+    job: &'e Job<'j>,
+    tile: Tile,
+    sink: &'e mut S,
+}
+
+impl<M: Memory, S: Sink> WithKernels for TileWork<'_, '_, M, S> {
+    #[inline(always)]
+    fn run<K: KernelSet>(self, kernels: K) {
+        self.engine
+            .tile_with(kernels, self.job, self.tile, self.sink);
     }
 }
 
@@ -542,10 +427,28 @@ impl<M: Memory> TileEngine<M> {
         Some(tile)
     }
 
+    /// Tile `tile` with the kernel set the job chose.
+    #[inline(always)]
+    fn tile<S: Sink>(&mut self, job: &Job<'_>, tile: Tile, sink: &mut S) {
+        let work = TileWork {
+            engine: self,
+            job,
+            tile,
+            sink,
+        };
+        job.kernels().run(work);
+    }
+
     /// Tile `tile` as windows of at most [`max_tile_width`](Self::max_tile_width)
     /// columns plus the halo, left to right.
     #[inline(always)]
-    fn tile<S: Sink>(&mut self, job: &Job<'_>, tile: Tile, sink: &mut S) {
+    fn tile_with<K: KernelSet, S: Sink>(
+        &mut self,
+        kernels: K,
+        job: &Job<'_>,
+        tile: Tile,
+        sink: &mut S,
+    ) {
         let (config, frames) = (job.config(), job.frames());
         let step = self.max_tile_width().max(1);
         let y_first = tile.y as isize - HALO as isize;
@@ -558,7 +461,7 @@ impl<M: Memory> TileEngine<M> {
             });
             // The rows are carved once per window, not once per row: with
             // memory of run-time width (`Slices`) carving is real work.
-            let mut pass = self.pass(job.kernels());
+            let mut pass = self.pass(kernels);
             for y in y_first..y_first + (tile.height + 2 * HALO) as isize {
                 let (prev, next) = (frames.prev().clamped_row(y), frames.next().clamped_row(y));
                 pass.push(config, prev, next, sink);
@@ -591,12 +494,12 @@ impl<M: Memory> TileEngine<M> {
         next: &[u8],
         sink: &mut S,
     ) {
-        self.pass(Kernels::default()).push(config, prev, next, sink);
+        self.pass(Native::default()).push(config, prev, next, sink);
     }
 
     /// The current window with the rows it computes in.
     #[inline(always)]
-    fn pass(&mut self, kernels: Kernels) -> Pass<'_> {
+    fn pass<K: KernelSet>(&mut self, kernels: K) -> Pass<'_, K> {
         let cols = self.memory.cols();
         Pass {
             window: &mut self.window,
@@ -606,12 +509,12 @@ impl<M: Memory> TileEngine<M> {
 }
 
 /// One window in progress: where it lies, and its rows.
-struct Pass<'m> {
+struct Pass<'m, K: KernelSet> {
     window: &'m mut Window,
-    rows: Rows<'m>,
+    rows: Rows<'m, K>,
 }
 
-impl Pass<'_> {
+impl<K: KernelSet> Pass<'_, K> {
     /// Feed window row `t` (frame rows of `fⁿ` and `fⁿ⁺¹`, each the full
     /// frame width) and run every stage it completes.
     #[inline(always)]
@@ -630,7 +533,7 @@ impl Pass<'_> {
         if t >= E_START {
             let [ex, ey] = &mut rows.e;
             let [scratch_x, scratch_y] = &mut rows.e_scratch;
-            boundary_minus_domain(
+            boundary_minus_domain::<K>(
                 rows.d.rows(t - 2 * E_RADIUS),
                 &mut rows.vert_d,
                 (scratch_x, scratch_y),
@@ -642,7 +545,7 @@ impl Pass<'_> {
             let first = t - V_LAG - V_RADIUS;
             let e = [rows.e[0].rows(first), rows.e[1].rows(first)];
             let [vx, vy] = &mut rows.v;
-            smooth(e, (vx.row_mut(t - V_LAG), vy.row_mut(t - V_LAG)), n);
+            smooth::<K>(e, (vx.row_mut(t - V_LAG), vy.row_mut(t - V_LAG)), n);
         }
         if t >= PRODUCT_START {
             let j = t - PRODUCT_LAG;
@@ -657,7 +560,6 @@ impl Pass<'_> {
             let structure = StructureRows {
                 int_products: &mut rows.int_products,
                 float_products: &mut rows.float_products,
-                sums: rows.sums.row_mut(j),
                 // Free once `E` of this push is in its ring.
                 scratch: {
                     let [gx, gy, ..] = &mut rows.vert_d;
@@ -665,7 +567,9 @@ impl Pass<'_> {
                     ScratchRows { gx, gy, high, low }
                 },
             };
-            structure_row(&input, structure, n);
+            structure_row::<K>(&input, structure, n);
+            let products = (&mut rows.int_products, &mut rows.float_products);
+            rows.sums.store_row(j, products, n);
         }
         if t >= OUTPUT_START {
             self.emit(config, t - OUTPUT_LAG, sink);
@@ -682,23 +586,18 @@ impl Pass<'_> {
             ..
         } = *self.window;
         let rows = &mut self.rows;
-        rows.structure_sums(o, n);
         let reads_fields = sink.reads_fields();
         let width = n.saturating_sub(2 * HALO);
-        let tail_rows = tail_input(
-            &rows.sums,
-            (&rows.int_products, &rows.float_products),
-            [rows.v[0].row(o), rows.v[1].row(o)],
-            o,
-        );
-        let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_mut().map(|row| first_mut(row, width));
-        let out = TailOut {
-            m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
-            fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
-        };
         let constants = TailConstants {
             lambda4: config.lambda4,
             units: config.units(),
+        };
+        let row = OutputRow {
+            o,
+            n,
+            products: (&mut rows.int_products, &mut rows.float_products),
+            v: [rows.v[0].row(o), rows.v[1].row(o)],
+            constants: &constants,
         };
         // The row's place in the frame, worked out where each call needs it:
         // held across the tail, it cost the M4 registers (445 → 451 per
@@ -711,14 +610,24 @@ impl Pass<'_> {
         };
         if !reads_fields {
             let (y, x) = at();
-            if let Some(m) = sink.magnitude_rows(y, x, width) {
-                let extremes = tail_rows.run(&constants, TailOut { m, fields: None });
+            if let Some([m_d, m_c]) = sink.magnitude_rows(y, x, width) {
+                let out = TailOut {
+                    m: [&mut *m_d, &mut *m_c],
+                    fields: None,
+                };
+                let found = rows.sums.tail_row(row, out);
+                let extremes = found.unwrap_or_else(|| ExtremesSink::of_rows(m_d, m_c));
                 let luma = first(from_first_output(rows.p0.row(o)), width);
                 sink.kept_row(y, x, luma, extremes);
                 return;
             }
         }
-        tail_rows.run(&constants, out);
+        let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_mut().map(|row| first_mut(row, width));
+        let out = TailOut {
+            m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
+            fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
+        };
+        rows.sums.tail_row(row, out);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));
         let [v_c_x, v_c_y, v_d_x, v_d_y] = rows.fields.each_ref().map(|row| first(row, width));
         let pixels = Pixels {
@@ -748,12 +657,6 @@ fn first<T>(row: &[T], width: usize) -> &[T] {
 fn first_mut<T>(row: &mut [T], width: usize) -> &mut [T] {
     let width = width.min(row.len());
     row.split_at_mut(width).0
-}
-
-/// A window row from the first output column (`HALO`) on.
-#[inline(always)]
-fn from_first_output<T>(row: &[T]) -> &[T] {
-    row.split_at(HALO.min(row.len())).1
 }
 
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the

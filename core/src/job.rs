@@ -1,15 +1,7 @@
 //! A plan bound to the frames it runs on: the one value an engine runs.
 
+use crate::kernels::Choice;
 use crate::{Config, Error, FramePair, Plan};
-
-/// Which kernels a job's pass runs: the portable ones, or on x86-64 with
-/// an [`Avx2`](crate::Avx2) token the structure sums and tail in AVX2
-/// lanes (`avx2`).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Kernels {
-    #[cfg(target_arch = "x86_64")]
-    pub(crate) avx2: Option<crate::Avx2>,
-}
 
 /// A [`Plan`] and a [`FramePair`] of the plan's size, checked once: running
 /// a job cannot fail ([`Engine::run`](crate::Engine::run)).
@@ -17,7 +9,7 @@ pub(crate) struct Kernels {
 pub struct Job<'a> {
     plan: &'a Plan,
     frames: FramePair<'a>,
-    kernels: Kernels,
+    kernels: Choice,
 }
 
 impl<'a> Job<'a> {
@@ -31,22 +23,19 @@ impl<'a> Job<'a> {
         Ok(Self {
             plan,
             frames,
-            kernels: Kernels::default(),
+            kernels: Choice::default(),
         })
     }
 
-    /// The same job, its structure sums and tail run in AVX2 lanes (the
-    /// same bytes): for hosts that found AVX2 and FMA at run time.
-    #[cfg(target_arch = "x86_64")]
-    pub fn with_avx2(self, avx2: crate::Avx2) -> Self {
-        Self {
-            kernels: Kernels { avx2: Some(avx2) },
-            ..self
-        }
+    /// The same job, its pass run with the kernel set `kernels`: a set
+    /// chosen at run time (`kernels/`; not every target has one).
+    #[allow(dead_code)]
+    pub(crate) const fn with_kernels(self, kernels: Choice) -> Self {
+        Self { kernels, ..self }
     }
 
-    /// The kernels its pass runs.
-    pub(crate) const fn kernels(&self) -> Kernels {
+    /// The kernel set its pass runs.
+    pub(crate) const fn kernels(&self) -> Choice {
         self.kernels
     }
 

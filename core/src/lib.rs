@@ -36,7 +36,10 @@
 //! a [`SliceEngine`] in slices the caller sizes at run time ([`MemorySize`]).
 //! Frames are cut into tiles ([`Plan`]); a tile wider than the engine's
 //! `COLS − 14` columns runs as several windows, and every tiling gives the
-//! same bytes. Sizes and parameters are checked once ([`Config`], [`Plan`],
+//! same bytes. Each row loop has one portable form; a target's faster
+//! forms (the M4F's assembly, x86-64's AVX2 lanes) are sets of overrides
+//! of it that give the same values, chosen once per target or per job.
+//! Sizes and parameters are checked once ([`Config`], [`Plan`],
 //! [`FramePair`], [`Job`], the sinks); after that nothing fails or panics.
 //! Other output goes through a [`Sink`], which sees each output row as
 //! [`Pixels`], a row per quantity (or [`FlowPixel`]s one at a time): the
@@ -53,38 +56,32 @@
 //! Changes to them follow semantic versioning; the bytes they produce change
 //! only with a SPEC change, recorded in the repository's golden files.
 #![no_std]
-// `unsafe` is allowed only where it lives, each block with its safety
-// argument: in `fpu.rs`, the `f32` square root on x86-64 (SSE) and aarch64
-// (NEON) through intrinsics, which vectorise where `libm`'s inline assembly
-// does not, and on the M4F (`VSQRT.F32` in `asm!`; `core` has no `f32` root
-// on stable, `libm`'s is software there), and the byte conversion of a
-// clamped value, whose checked form kept the x86-64 byte loops scalar (193
-// instructions for 32 bytes against 57); in `m4.rs`, the M4F's and M7's
-// hottest row loops in `asm!` (with `wide_products`, 443 → 306
-// instructions a pixel at 320×240), held equal to their portable twins by
-// `kernel_check` on the emulated boards; in `avx2.rs`, the structure sums
-// and the tail of x86-64 hosts that find AVX2 at run time in intrinsics
-// (the `#[target_feature]` calls, which its token makes sound, and loads
-// and stores of eight lanes within rows checked once a row), held equal to
-// the portable pass by `tests/tests/simd.rs`.
+// `unsafe` is allowed only where it lives, all in `kernels/`, each block
+// with its safety argument: in `fpu.rs`, the `f32` square root on x86-64
+// (SSE) and aarch64 (NEON) through intrinsics, which vectorise where
+// `libm`'s inline assembly does not, and on the M4F (`VSQRT.F32` in
+// `asm!`; `core` has no `f32` root on stable, `libm`'s is software there),
+// and the byte conversion of a clamped value, whose checked form kept the
+// x86-64 byte loops scalar (193 instructions for 32 bytes against 57); in
+// `m4.rs`, the M4F's and M7's hottest row loops in `asm!` (with
+// `wide_products`, 443 → 306 instructions a pixel at 320×240), held equal
+// to their portable twins by `kernel_check` on the emulated boards; in
+// `avx2.rs`, the structure sums and the tail of x86-64 hosts that find
+// AVX2 at run time in intrinsics (the `#[target_feature]` calls, which its
+// token makes sound, and loads and stores of eight lanes within rows
+// checked once a row), held equal to the portable pass by
+// `tests/tests/simd.rs`.
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 
 #[cfg(test)]
 extern crate std;
 
-#[cfg(target_arch = "x86_64")]
-mod avx2;
 mod engine;
 mod error;
-mod fpu;
 mod frames;
 mod job;
-#[cfg(feature = "kernel-check")]
-#[doc(hidden)]
-pub mod kernel_check;
-#[cfg(fpu_f32)]
-mod m4;
+mod kernels;
 mod params;
 mod pixels;
 mod plan;
@@ -96,7 +93,6 @@ mod sink;
 mod stages;
 mod stream;
 mod tail;
-mod wide_products;
 
 /// Whether the compiler takes the row loops in vector lanes (`build.rs`):
 /// there, forms that keep a loop branch-free with independent taps win; on
@@ -104,8 +100,6 @@ mod wide_products;
 /// registers do (`stages`, `scale`).
 const VECTOR_ROWS: bool = cfg!(vector_rows);
 
-#[cfg(target_arch = "x86_64")]
-pub use avx2::Avx2;
 pub use engine::{
     Arrays, Engine, Memory, MemorySize, Sink, SliceEngine, Slices, TileEngine, working_bytes,
 };
@@ -113,6 +107,11 @@ pub use error::Error;
 pub use fixed;
 pub use frames::{Frame, FramePair};
 pub use job::Job;
+#[cfg(target_arch = "x86_64")]
+pub use kernels::avx2::Avx2;
+#[cfg(feature = "kernel-check")]
+#[doc(hidden)]
+pub use kernels::kernel_check;
 pub use params::{Config, IntensityScale, MAX_SIDE, Params};
 pub use pixels::{Fields, FlowPixel, Pixels};
 pub use plan::{Plan, Tile, first_stage_pixels};

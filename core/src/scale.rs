@@ -81,13 +81,13 @@ impl ByteScale {
     /// clamped to `[0, 255]` (truncated toward zero).
     #[inline(always)]
     pub fn byte(&self, m: f32) -> u8 {
-        crate::fpu::byte((m - self.offset) * self.gain + 0.5)
+        crate::kernels::fpu::byte((m - self.offset) * self.gain + 0.5)
     }
 
     /// `[offset, gain]`: [`ByteScale::byte`] is `⌊t⌋` of
     /// `t = (m − offset) · gain + ½` (each operation rounded to `f32`)
-    /// clamped to `[0, 255]`, for a byte step written elsewhere (the host's
-    /// AVX2 one, the M4F's).
+    /// clamped to `[0, 255]`, for a byte step written elsewhere (the host's,
+    /// a kernel set's in `kernels/`).
     #[inline(always)]
     pub fn parts(&self) -> [f32; 2] {
         [self.offset, self.gain]

@@ -1,5 +1,6 @@
 //! Ready-made sinks: field planes, the RGB representation, and extremes.
 
+use crate::kernels::{KernelSet, Native};
 use crate::{ByteScale, Config, Error, Extremes, FlowPixel, Pixels, Sink};
 
 /// Check that an output plane holds a whole frame.
@@ -130,24 +131,13 @@ pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out
         }
         (m_d, m_c, luma, out) = (md_rest, mc_rest, l_rest, o_rest);
     }
-    #[cfg(fpu_f32)]
-    {
-        // The M4F's loop, in assembly (`m4`), for as many pixels as all
-        // hold.
-        let n = out.len().min(m_d.len()).min(m_c.len()).min(luma.len());
-        let (Some(out), Some(luma)) = (out.get_mut(..n), luma.get(..n)) else {
-            return;
-        };
-        crate::m4::rgb_row([m_d, m_c], luma, [scale_d.parts(), scale_c.parts()], out);
-    }
-    #[cfg(not(fpu_f32))]
-    portable_rgb_tail(m_d, m_c, luma, [scale_d, scale_c], out);
+    // The rest one pixel at a time, in the target's kernel.
+    Native::rgb_pixels(m_d, m_c, luma, [scale_d, scale_c], out);
 }
 
 /// [`rgb_row`]'s pixels one at a time (all of them on the scalar boards,
 /// the batches' remainder elsewhere).
 #[inline(always)]
-#[cfg_attr(fpu_f32, allow(dead_code))] // there `m4::rgb_row`'s twin (`kernel_check`)
 pub(crate) fn portable_rgb_tail(
     m_d: &[f32],
     m_c: &[f32],
@@ -238,6 +228,14 @@ pub struct ExtremesSink {
 }
 
 impl ExtremesSink {
+    /// The extremes of the magnitudes of a row segment.
+    pub(crate) fn of_rows(m_d: &[f32], m_c: &[f32]) -> Self {
+        let mut extremes = Self::default();
+        extremes.m_d.add_all(m_d);
+        extremes.m_c.add_all(m_c);
+        extremes
+    }
+
     /// Merge the extremes of another part of the frame.
     pub fn merge(&mut self, other: ExtremesSink) {
         self.m_d.merge(other.m_d);

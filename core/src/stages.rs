@@ -44,61 +44,41 @@
 
 use core::ops::Add;
 
+use crate::kernels::KernelSet;
+
 /// What the binomial sums add: exact integers, or `f32` (the sums of `p`
 /// and `q`).
 pub trait Sample: Copy + Default + Add<Output = Self> {
-    /// Whether sums are exact, so that any order of adding gives the same
-    /// value (the running form below; `f32` sums keep one order everywhere).
-    const EXACT: bool;
-
     /// `a + 4b + 6c + 4d + e`, the binomial `[1 4 6 4 1]` (SPEC's `G`, ×16).
     fn binomial(a: Self, b: Self, c: Self, d: Self, e: Self) -> Self;
 
-    /// [`Sample::binomial`] of every column of five rows on the scalar
-    /// boards (`out.len()` columns; shorter rows leave `out` untouched).
-    #[inline(always)]
-    fn binomial_rows(rows: [&[Self]; 5], out: &mut [Self]) {
-        let [a, b, c, d, e] = rows;
-        binomial_of(a, b, c, d, e, out);
-    }
+    /// The set's kernel for this kind of sum (on the scalar boards).
+    fn binomial_kernel<K: KernelSet>(binomial: Binomial<'_, Self>);
+}
 
-    /// The horizontal binomial of `out.len() + 4` taps on the scalar
-    /// boards: [`running_binomial`] for exact sums, [`sliding_binomial`]
-    /// (the tapped order) for `f32`.
-    #[inline(always)]
-    fn binomial_taps(taps: &[Self], out: &mut [Self]) {
-        if Self::EXACT {
-            running_binomial(taps, out);
-        } else {
-            sliding_binomial(taps, out);
-        }
-    }
+/// A binomial a kernel set computes, on the scalar boards (shorter rows
+/// leave `out` untouched).
+pub enum Binomial<'a, T> {
+    /// [`Sample::binomial`] of every column of five rows, `out.len()`
+    /// columns (the vertical one).
+    Rows([&'a [T]; 5], &'a mut [T]),
+    /// The horizontal one of `out.len() + 4` taps.
+    Taps(&'a [T], &'a mut [T]),
 }
 
 impl Sample for i32 {
-    const EXACT: bool = true;
-
     #[inline(always)]
     fn binomial(a: i32, b: i32, c: i32, d: i32, e: i32) -> i32 {
         (a + e) + ((b + d) << 2) + (c << 2) + (c << 1)
     }
 
-    #[cfg(fpu_f32)]
     #[inline(always)]
-    fn binomial_rows(rows: [&[i32]; 5], out: &mut [i32]) {
-        crate::m4::binomial_i32(rows, out);
-    }
-
-    #[cfg(fpu_f32)]
-    #[inline(always)]
-    fn binomial_taps(taps: &[i32], out: &mut [i32]) {
-        crate::m4::running_binomial_i32(taps, out);
+    fn binomial_kernel<K: KernelSet>(binomial: Binomial<'_, i32>) {
+        K::binomial_exact(binomial);
     }
 }
 
 impl Sample for f32 {
-    const EXACT: bool = false;
-
     /// In this order on every target (`×4` is exact; `×6` and each sum
     /// round once).
     #[inline(always)]
@@ -106,16 +86,9 @@ impl Sample for f32 {
         ((a + e) + (b + d) * 4.0) + c * 6.0
     }
 
-    #[cfg(fpu_f32)]
     #[inline(always)]
-    fn binomial_rows(rows: [&[f32]; 5], out: &mut [f32]) {
-        crate::m4::binomial_f32(rows, out);
-    }
-
-    #[cfg(fpu_f32)]
-    #[inline(always)]
-    fn binomial_taps(taps: &[f32], out: &mut [f32]) {
-        crate::m4::sliding_binomial_f32(taps, out);
+    fn binomial_kernel<K: KernelSet>(binomial: Binomial<'_, f32>) {
+        K::binomial_float(binomial);
     }
 }
 
@@ -128,7 +101,12 @@ fn span(n: usize, r: usize) -> core::ops::Range<usize> {
 
 /// The vertical binomial of five rows on `[r, n − r)`.
 #[inline(always)]
-pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r: usize) {
+pub(crate) fn vertical_binomial<K: KernelSet, T: Sample>(
+    rows: [&[T]; 5],
+    out: &mut [T],
+    n: usize,
+    r: usize,
+) {
     let cols = span(n, r);
     let len = cols.len();
     let [a, b, c, d, e] = rows.map(|row| cut(row, cols.start, len));
@@ -140,7 +118,7 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
     if crate::VECTOR_ROWS {
         binomial_of(a, b, c, d, e, opaque(out));
     } else {
-        T::binomial_rows([a, b, c, d, e], out);
+        T::binomial_kernel::<K>(Binomial::Rows([a, b, c, d, e], out));
     }
 }
 
@@ -160,15 +138,7 @@ pub fn vertical_binomial<T: Sample>(rows: [&[T]; 5], out: &mut [T], n: usize, r:
 #[cfg_attr(not(dispatched_pass), inline(never))]
 pub(crate) fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T], out: &mut [T]) {
     let len = out.len();
-    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
-        a.get(..len),
-        b.get(..len),
-        c.get(..len),
-        d.get(..len),
-        e.get(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => a, b, c, d, e);
     for i in 0..len {
         out[i] = T::binomial(a[i], b[i], c[i], d[i], e[i]);
     }
@@ -176,7 +146,12 @@ pub(crate) fn binomial_of<T: Sample>(a: &[T], b: &[T], c: &[T], d: &[T], e: &[T]
 
 /// The horizontal binomial of a row valid on `[r − 2, n − r + 2)`, on `[r, n − r)`.
 #[inline(always)]
-fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) {
+pub(crate) fn horizontal_binomial<K: KernelSet, T: Sample>(
+    row: &[T],
+    out: &mut [T],
+    n: usize,
+    r: usize,
+) {
     let cols = span(n, r.max(2));
     let len = cols.len();
     let Some(out) = cut_mut(out, cols.start, len) else {
@@ -190,7 +165,7 @@ fn horizontal_binomial<T: Sample>(row: &[T], out: &mut [T], n: usize, r: usize) 
     if crate::VECTOR_ROWS {
         tapped_binomial(row, first, out);
     } else if let Some(taps) = cut(row, first, len + 4) {
-        T::binomial_taps(taps, out);
+        T::binomial_kernel::<K>(Binomial::Taps(taps, out));
     }
 }
 
@@ -258,7 +233,7 @@ pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
 #[inline(always)]
-pub fn boundary_minus_domain(
+pub fn boundary_minus_domain<K: KernelSet>(
     d: [&[i16]; 5],
     vert: &mut [&mut [i16]; 4],
     e: Pair<'_, i32>,
@@ -266,18 +241,18 @@ pub fn boundary_minus_domain(
     n: usize,
 ) {
     let [v1, v2, v3, v4] = vert;
-    vertical_parts(d, v1, v2, v3, v4, span(n, 0));
+    vertical_parts::<K>(d, v1, v2, v3, v4, span(n, 0));
     let (ex, ey) = e;
     horizontal_parts([v1, v2, v3, v4], ex, ey, span(n, 2));
     // The horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
     // vertical one): the ring keeps `E` smoothed along its row.
-    horizontal_binomial(ex, e_smoothed.0, n, 4);
-    horizontal_binomial(ey, e_smoothed.1, n, 4);
+    horizontal_binomial::<K, _>(ex, e_smoothed.0, n, 4);
+    horizontal_binomial::<K, _>(ey, e_smoothed.1, n, 4);
 }
 
 /// The four vertical parts of `E` on columns `cols`.
 #[inline(always)]
-fn vertical_parts(
+fn vertical_parts<K: KernelSet>(
     d: [&[i16]; 5],
     v1: &mut [i16],
     v2: &mut [i16],
@@ -285,21 +260,10 @@ fn vertical_parts(
     v4: &mut [i16],
     cols: core::ops::Range<usize>,
 ) {
-    let (start, len) = (cols.start, cols.len());
-    let [d0, d1, d2, d3, d4] = d.map(|row| cut(row, start, len));
-    let (Some(d0), Some(d1), Some(d2), Some(d3), Some(d4)) = (d0, d1, d2, d3, d4) else {
-        return;
-    };
-    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
-        cut_mut(v1, start, len),
-        cut_mut(v2, start, len),
-        cut_mut(v3, start, len),
-        cut_mut(v4, start, len),
-    ) else {
-        return;
-    };
-    #[cfg(fpu_f32)]
-    if crate::m4::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
+    let [d0, d1, d2, d3, d4] = d;
+    cut_rows!(cols.start, cols.len() => d0, d1, d2, d3, d4);
+    cut_rows!(cols.start, cols.len() => ; mut v1, v2, v3, v4);
+    if K::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
         return;
     }
     vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
@@ -317,19 +281,8 @@ pub(crate) fn vertical_parts_of(
     v4: &mut [i16],
 ) {
     let len = d0.len();
-    let (Some(d1), Some(d2), Some(d3), Some(d4)) =
-        (d1.get(..len), d2.get(..len), d3.get(..len), d4.get(..len))
-    else {
-        return;
-    };
-    let (Some(v1), Some(v2), Some(v3), Some(v4)) = (
-        v1.get_mut(..len),
-        v2.get_mut(..len),
-        v3.get_mut(..len),
-        v4.get_mut(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => d1, d2, d3, d4);
+    cut_rows!(len => ; mut v1, v2, v3, v4);
     for i in 0..len {
         let (a, b, c, dd, ee) = (d0[i], d1[i], d2[i], d3[i], d4[i]);
         v1[i] = b + 4 * c + dd;
@@ -399,27 +352,8 @@ fn component_of(
     out: &mut [i32],
 ) {
     let len = out.len();
-    fn cut(tap: &[i16], len: usize) -> Option<&[i16]> {
-        tap.get(..len)
-    }
-    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (
-        cut(a, len),
-        cut(b, len),
-        cut(c, len),
-        cut(d, len),
-        cut(e, len),
-    ) else {
-        return;
-    };
-    let (Some(f), Some(g), Some(h), Some(i), Some(j)) = (
-        cut(f, len),
-        cut(g, len),
-        cut(h, len),
-        cut(i, len),
-        cut(j, len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => a, b, c, d, e);
+    cut_rows!(len => f, g, h, i, j);
     for k in 0..len {
         out[k] = formula(
             [a[k], b[k], c[k], d[k], e[k]],
@@ -535,10 +469,10 @@ fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
 /// vector lanes (with the horizontal half last, from a scratch row into
 /// the ring of `V`, the x86-64 pass ran it scalar).
 #[inline(always)]
-pub fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
+pub fn smooth<K: KernelSet>(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e_smoothed;
-    vertical_binomial(ex, v.0, n, 4);
-    vertical_binomial(ey, v.1, n, 4);
+    vertical_binomial::<K, _>(ex, v.0, n, 4);
+    vertical_binomial::<K, _>(ey, v.1, n, 4);
     debug_assert!(
         v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
         "V beyond its bound"
@@ -635,6 +569,32 @@ pub(crate) fn cut_mut<T>(row: &mut [T], start: usize, len: usize) -> Option<&mut
     row.get_mut(start..)?.get_mut(..len)
 }
 
+/// Each named row (a local slice) [`cut`] to `len` elements from `start`
+/// (its first `len` without one), and each after `mut` likewise to be
+/// written, or a return from the function where one is shorter (never,
+/// for the engine's rows): the row loops' one way to know their rows'
+/// lengths.
+macro_rules! cut_rows {
+    ($len:expr => $($row:ident),* $(; mut $($out:ident),+)?) => {
+        let len: usize = $len;
+        let ($(Some($row),)* $($(Some($out),)+)?) =
+            ($($row.get(..len),)* $($($out.get_mut(..len),)+)?)
+        else {
+            return;
+        };
+    };
+    ($start:expr, $len:expr => $($row:ident),* $(; mut $($out:ident),+)?) => {
+        let (start, len): (usize, usize) = ($start, $len);
+        let ($(Some($row),)* $($(Some($out),)+)?) = (
+            $($crate::stages::cut($row, start, len),)*
+            $($($crate::stages::cut_mut($out, start, len),)+)?
+        ) else {
+            return;
+        };
+    };
+}
+pub(crate) use cut_rows;
+
 /// The row shifted by `−2 … +2` around `len` columns from `start` (tap `k`
 /// of column `i` is element `start + i + k − 2`), each [`cut`] to `len`.
 #[inline(always)]
@@ -649,48 +609,32 @@ fn taps5<T>(row: &[T], start: usize, len: usize) -> Option<[&[T]; 5]> {
     ])
 }
 
-/// The five products on columns `cols`: on the M4F `wide_products`'
-/// loops, elsewhere every row cut to exactly the columns (shifted rows one
-/// either side), then [`products_of`].
+/// The five products on columns `cols`: the product rows cut to them, then
+/// the set's kernel ([`portable_products_row`] by default).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn products_row(
+fn products_row<K: KernelSet>(
     input: &ResidualInputs<'_>,
-    xx: &mut [i32],
-    xy: &mut [i32],
-    yy: &mut [i32],
-    xd: &mut [f32],
-    yd: &mut [f32],
+    [xx, xy, yy]: [&mut [i32]; 3],
+    [xd, yd]: [&mut [f32]; 2],
     scratch: ScratchRows<'_>,
     cols: core::ops::Range<usize>,
 ) {
-    let (start, len) = (cols.start, cols.len());
-    let (Some(xx), Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        cut_mut(xx, start, len),
-        cut_mut(xy, start, len),
-        cut_mut(yy, start, len),
-        cut_mut(xd, start, len),
-        cut_mut(yd, start, len),
-    ) else {
-        return;
+    cut_rows!(cols.start, cols.len() => ; mut xx, xy, yy, xd, yd);
+    let rows = ProductRows {
+        ints: [xx, xy, yy],
+        floats: [xd, yd],
+        scratch,
     };
-    if cfg!(fpu_f32) {
-        crate::wide_products::products_row(input, [xx, xy, yy], [xd, yd], scratch, cols);
-    } else {
-        portable_products_row(input, xx, xy, yy, xd, yd, cols);
-    }
+    K::products_row(input, rows, cols);
 }
 
-/// [`products_row`] on the targets other than the M4F, into product rows
-/// already cut to the columns.
+/// [`products_row`]'s portable kernel, into product rows already cut to
+/// the columns.
 #[inline(always)]
 pub(crate) fn portable_products_row(
     input: &ResidualInputs<'_>,
-    xx: &mut [i32],
-    xy: &mut [i32],
-    yy: &mut [i32],
-    xd: &mut [f32],
-    yd: &mut [f32],
+    [xx, xy, yy]: [&mut [i32]; 3],
+    [xd, yd]: [&mut [f32]; 2],
     cols: core::ops::Range<usize>,
 ) {
     let ResidualInputs {
@@ -793,44 +737,10 @@ fn products_of(
     yd: &mut [f32],
 ) {
     let len = xx.len();
-    fn first<T>(row: &[T], len: usize) -> Option<&[T]> {
-        row.get(..len)
-    }
-    let words = |row| first::<i32>(row, len);
-    let bytes = |row| first::<u8>(row, len);
-    let (Some(vx_l), Some(vx_c), Some(vx_r), Some(vy_u), Some(vy_c), Some(vy_d)) = (
-        words(vx_l),
-        words(vx_c),
-        words(vx_r),
-        words(vy_u),
-        words(vy_c),
-        words(vy_d),
-    ) else {
-        return;
-    };
-    let (Some(pu0), Some(pu1), Some(pu2), Some(pm0), Some(pm1), Some(pm2)) = (
-        bytes(pu0),
-        bytes(pu1),
-        bytes(pu2),
-        bytes(pm0),
-        bytes(pm1),
-        bytes(pm2),
-    ) else {
-        return;
-    };
-    let (Some(pd0), Some(pd1), Some(pd2), Some(d)) =
-        (bytes(pd0), bytes(pd1), bytes(pd2), d.get(..len))
-    else {
-        return;
-    };
-    let (Some(xy), Some(yy), Some(xd), Some(yd)) = (
-        xy.get_mut(..len),
-        yy.get_mut(..len),
-        xd.get_mut(..len),
-        yd.get_mut(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => vx_l, vx_c, vx_r, vy_u, vy_c, vy_d);
+    cut_rows!(len => pu0, pu1, pu2, pm0, pm1, pm2);
+    cut_rows!(len => pd0, pd1, pd2, d);
+    cut_rows!(len => ; mut xy, yy, xd, yd);
     for i in 0..len {
         let (vx_l, vx_c, vx_r) = (vx_l[i], vx_c[i], vx_r[i]);
         let (vy_u, vy_c, vy_d) = (vy_u[i], vy_c[i], vy_d[i]);
@@ -854,8 +764,8 @@ fn products_of(
 }
 
 /// Rows a structure row may use for its intermediate values (the engine
-/// lends rows that are free at that point; the M4F's products use them,
-/// `wide_products`).
+/// lends rows that are free at that point; a kernel set's products may use
+/// them, `kernels/`).
 pub struct ScratchRows<'a> {
     /// `X`.
     pub gx: &'a mut [i16],
@@ -867,63 +777,44 @@ pub struct ScratchRows<'a> {
     pub low: &'a mut [i32],
 }
 
-/// The products' rows and the sums' rows of one structure row: the exact
-/// integer channels and the `f32` ones.
+/// The product rows of one structure row cut to its columns, and the rows
+/// for intermediate values: what a kernel set's products write.
+pub struct ProductRows<'a> {
+    /// `X², XY, Y²`.
+    pub ints: [&'a mut [i32]; INT_CHANNELS],
+    /// `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰`.
+    pub floats: [&'a mut [f32]; FLOAT_CHANNELS],
+    /// Rows for the intermediate values.
+    pub scratch: ScratchRows<'a>,
+}
+
+/// The products' rows of one structure row: the exact integer channels
+/// and the `f32` ones.
 pub struct StructureRows<'a, 'm> {
     /// `X², XY, Y²` on `[5, n−5)`.
     pub int_products: &'a mut [&'m mut [i32]; INT_CHANNELS],
     /// `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on `[5, n−5)`.
     pub float_products: &'a mut [&'m mut [f32]; FLOAT_CHANNELS],
-    /// Where their horizontal `G` on `[7, n−7)` goes.
-    pub sums: Sums<'a>,
-    /// Rows for the intermediate values (FPU boards).
+    /// Rows for the intermediate values.
     pub scratch: ScratchRows<'a>,
 }
 
-/// One row of each structure sums ring: a row per channel (the integer
-/// channels', then the `f32` ones'), or with the AVX2 kernels one row of
-/// blocks of each kind (`avx2`).
-pub enum Sums<'a> {
-    /// A row per channel.
-    Planar(
-        [&'a mut [i32]; INT_CHANNELS],
-        [&'a mut [f32]; FLOAT_CHANNELS],
-    ),
-    /// The integer and the `f32` rings' memory in blocks, and the row's
-    /// slot (`avx2`).
-    #[cfg(target_arch = "x86_64")]
-    Blocked(crate::Avx2, &'a mut [i32], &'a mut [f32], usize),
-}
-
-/// The five products on `[5, n−5)`, then their horizontal `G` on
-/// `[7, n−7)` into one row of each sum ring.
+/// The five products on `[5, n−5)` (their horizontal `G` into the sums'
+/// rings is the rings' own, `kernels::SumRings::store_row`).
 #[inline(always)]
-pub fn structure_row(input: &ResidualInputs<'_>, rows: StructureRows<'_, '_>, n: usize) {
+pub fn structure_row<K: KernelSet>(
+    input: &ResidualInputs<'_>,
+    rows: StructureRows<'_, '_>,
+    n: usize,
+) {
     let StructureRows {
         int_products,
         float_products,
-        sums,
         scratch,
     } = rows;
     let [xx, xy, yy] = int_products;
     let [xd, yd] = float_products;
-    products_row(input, xx, xy, yy, xd, yd, scratch, span(n, 5));
-    match sums {
-        Sums::Planar(int_sums, float_sums) => {
-            for (row, sum) in int_products.iter().zip(int_sums) {
-                horizontal_binomial(row, sum, n, 7);
-            }
-            for (row, sum) in float_products.iter().zip(float_sums) {
-                horizontal_binomial(row, sum, n, 7);
-            }
-        }
-        #[cfg(target_arch = "x86_64")]
-        Sums::Blocked(avx2, int_sums, float_sums, slot) => {
-            let ints = int_products.each_ref().map(|row| &row[..]);
-            let floats = float_products.each_ref().map(|row| &row[..]);
-            crate::avx2::horizontal_sums(avx2, ints, floats, (int_sums, float_sums, slot), n);
-        }
-    }
+    products_row::<K>(input, [xx, xy, yy], [xd, yd], scratch, span(n, 5));
 }
 
 #[cfg(test)]

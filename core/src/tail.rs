@@ -6,7 +6,7 @@
 //! conversions from `i32`), written in a fixed order: no fused
 //! multiply-add (Rust never contracts `a * b + c`; the M4's `VMLA` is the
 //! unfused form), no library function but the square root, which IEEE
-//! rounds correctly too (`fpu::sqrt`). So the hardware floats of x86-64,
+//! rounds correctly too (`kernels::fpu::sqrt`). So the hardware floats of x86-64,
 //! aarch64 and the M4F and the software floats of the M0 and RV32 give the
 //! same bits, and the row loop takes vector lanes where the target has them
 //! (eight pixels per AVX2 instruction, `vdivps`, `vsqrtps`).
@@ -30,9 +30,9 @@
 //! at `s = 1/1024, λ = 1e-6` well inside the tolerances
 //! (`tests/tests/accuracy.rs`).
 
-use crate::fpu::sqrt;
+use crate::kernels::fpu::sqrt;
 use crate::params::Units;
-use crate::stages::opaque;
+use crate::stages::{cut_rows, opaque};
 
 /// The rows the tail reads, each from the first output column: the
 /// structure sums `a, b, c` (exact integers) and `p, q` (`f32`), and `V`.
@@ -105,33 +105,11 @@ fn curl_free_magnitude(k: &TailConstants, [x, y]: [f32; 2]) -> f32 {
     sqrt(x * x + y * y) * k.units.v_c
 }
 
-/// The tail of every pixel of `out`. Every row is as long as `m_d` (the
-/// engine's are); should one be shorter, nothing is written.
+/// The tail of every pixel of `out`, the portable kernel (a kernel set
+/// may override it, `kernels::KernelSet::tail_row`). Every row is as long
+/// as `m_d` (the engine's are); should one be shorter, nothing is written.
 #[inline(always)]
-pub fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
-    // The M4F's magnitudes: a loop each, in assembly (`m4`).
-    #[cfg(fpu_f32)]
-    if let TailOut {
-        m: [m_d, m_c],
-        fields: None,
-    } = out
-    {
-        let TailRows {
-            abc: [a, b, c],
-            pq: [p, q],
-            v: [vx, vy],
-        } = *rows;
-        let units = [k.units.det_floor, k.units.v_d];
-        crate::m4::divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
-        crate::m4::curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
-        return;
-    }
-    tail_row_portable(k, rows, out);
-}
-
-/// [`tail_row`] in portable code on every target.
-#[inline(always)]
-pub(crate) fn tail_row_portable(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
+pub(crate) fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
     let TailRows {
         abc: [a, b, c],
         pq: [p, q],
@@ -198,26 +176,8 @@ fn pixels_of<const FIELDS: bool>(
 ) {
     let n = m_d.len();
     let f = if FIELDS { n } else { 0 };
-    let (Some(a), Some(b), Some(c), Some(vx), Some(vy), Some(p), Some(q), Some(m_c)) = (
-        a.get(..n),
-        b.get(..n),
-        c.get(..n),
-        vx.get(..n),
-        vy.get(..n),
-        p.get(..n),
-        q.get(..n),
-        m_c.get_mut(..n),
-    ) else {
-        return;
-    };
-    let (Some(v_c_x), Some(v_c_y), Some(v_d_x), Some(v_d_y)) = (
-        v_c_x.get_mut(..f),
-        v_c_y.get_mut(..f),
-        v_d_x.get_mut(..f),
-        v_d_y.get_mut(..f),
-    ) else {
-        return;
-    };
+    cut_rows!(n => a, b, c, vx, vy, p, q; mut m_c);
+    cut_rows!(f => ; mut v_c_x, v_c_y, v_d_x, v_d_y);
     for i in 0..n {
         let solved = solve(k, [a[i], b[i], c[i]], [p[i], q[i]]);
         let v = [vx[i] as f32, vy[i] as f32];

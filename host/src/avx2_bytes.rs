@@ -108,10 +108,28 @@ fn interleave_masks() -> [[__m256i; 3]; 3] {
 /// then the halves' chunks put in order (the lower half's pixels first).
 #[target_feature(enable = "avx2")]
 fn interleave(channels: [__m256i; 3], masks: &[[__m256i; 3]; 3]) -> [__m256i; 3] {
-    let [c0, c1, c2] = masks.map(|mask| {
-        let [r, g, b] = [0, 1, 2].map(|k| _mm256_shuffle_epi8(channels[k], mask[k]));
-        _mm256_or_si256(_mm256_or_si256(r, g), b)
-    });
+    // Written out, not by closures: LLVM left a closure here out of line
+    // in some builds of the host (twice the instructions of the step).
+    let [r, g, b] = channels;
+    let [[r0, g0, b0], [r1, g1, b1], [r2, g2, b2]] = *masks;
+    let (r0, g0, b0) = (
+        _mm256_shuffle_epi8(r, r0),
+        _mm256_shuffle_epi8(g, g0),
+        _mm256_shuffle_epi8(b, b0),
+    );
+    let (r1, g1, b1) = (
+        _mm256_shuffle_epi8(r, r1),
+        _mm256_shuffle_epi8(g, g1),
+        _mm256_shuffle_epi8(b, b1),
+    );
+    let (r2, g2, b2) = (
+        _mm256_shuffle_epi8(r, r2),
+        _mm256_shuffle_epi8(g, g2),
+        _mm256_shuffle_epi8(b, b2),
+    );
+    let c0 = _mm256_or_si256(_mm256_or_si256(r0, g0), b0);
+    let c1 = _mm256_or_si256(_mm256_or_si256(r1, g1), b1);
+    let c2 = _mm256_or_si256(_mm256_or_si256(r2, g2), b2);
     [
         _mm256_permute2x128_si256::<0x20>(c0, c1),
         _mm256_permute2x128_si256::<0x30>(c2, c0),

@@ -503,37 +503,8 @@ impl Sink for KeptMagnitudes<'_> {
     }
 
     #[inline(always)]
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<ExtremesSink>) {
-        let range = self.range(y, x, luma.len());
-        let [m_d, m_c] = &self.planes;
-        let rows = m_d.get(range.clone()).zip(m_c.get(range));
-        add_kept_row(&mut self.extremes, (y, x), luma, rows, extremes);
-    }
-}
-
-/// A kept row's share of the frame's extremes: those the engine found as
-/// it wrote the row (`found`), else those of the kept magnitudes `rows`
-/// ([`Sink::kept_row`]).
-#[inline(always)]
-pub(crate) fn add_kept_row(
-    extremes: &mut ExtremesSink,
-    (y, x): (usize, usize),
-    luma: &[u8],
-    rows: Option<(&[f32], &[f32])>,
-    found: Option<ExtremesSink>,
-) {
-    match (found, rows) {
-        (Some(found), _) => extremes.merge(found),
-        (None, Some((m_d, m_c))) => {
-            let pixels = Pixels {
-                m_d,
-                m_c,
-                luma,
-                fields: None,
-            };
-            extremes.row(y, x, pixels);
-        }
-        (None, None) => {}
+    fn kept_row(&mut self, _y: usize, _x: usize, _luma: &[u8], extremes: ExtremesSink) {
+        self.extremes.merge(extremes);
     }
 }
 

@@ -516,17 +516,8 @@ impl Sink for TileRows<'_> {
     }
 
     #[inline(always)]
-    fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: Option<ExtremesSink>) {
-        let (x0, y0) = self.origin;
-        let rows = y
-            .checked_sub(y0)
-            .zip(x.checked_sub(x0))
-            .and_then(|(row, start)| {
-                let range = start..start + luma.len();
-                let m_d = self.m_d.get(row)?.get(range.clone())?;
-                Some((m_d, self.m_c.get(row)?.get(range)?))
-            });
-        fixed_engine::add_kept_row(&mut self.extremes, (y, x), luma, rows, extremes);
+    fn kept_row(&mut self, _y: usize, _x: usize, _luma: &[u8], extremes: ExtremesSink) {
+        self.extremes.merge(extremes);
     }
 }
 

@@ -92,6 +92,9 @@ struct OwnRows {
     /// Rows announced through `kept_row`, and through `row`.
     kept: usize,
     handed: usize,
+    /// Kept rows whose extremes, as the engine handed them, are not those
+    /// of the row's magnitudes.
+    wrong_extremes: usize,
 }
 
 impl reynoldsflow_core::Sink for OwnRows {
@@ -120,9 +123,13 @@ impl reynoldsflow_core::Sink for OwnRows {
         y: usize,
         x: usize,
         luma: &[u8],
-        _: Option<reynoldsflow_core::ExtremesSink>,
+        extremes: reynoldsflow_core::ExtremesSink,
     ) {
         let at = y * self.width + x..y * self.width + x + luma.len();
+        let mut want = reynoldsflow_core::ExtremesSink::default();
+        want.m_d.add_all(&self.m_d[at.clone()]);
+        want.m_c.add_all(&self.m_c[at.clone()]);
+        self.wrong_extremes += usize::from(extremes != want);
         self.luma[at].copy_from_slice(luma);
         self.kept += 1;
     }
@@ -152,6 +159,7 @@ fn a_sink_keeping_magnitudes_in_its_own_rows_gets_the_same_values() {
             decline,
             kept: 0,
             handed: 0,
+            wrong_extremes: 0,
         };
         reynoldsflow_tests::engine().run(&job, &mut sink);
         let what = format!("tile {tile:?}");
@@ -166,5 +174,6 @@ fn a_sink_keeping_magnitudes_in_its_own_rows_gets_the_same_values() {
         let declined = (0..h).filter(|&y| decline(y)).count();
         assert_eq!(sink.handed, across * declined, "{what}");
         assert_eq!(sink.kept, across * (h - declined), "{what}");
+        assert_eq!(sink.wrong_extremes, 0, "{what}");
     }
 }

@@ -21,13 +21,14 @@
 //! (negating the sum turns the half-up floor into `⌊(x + 2^(σ−1) − 1) / 2^σ⌋`),
 //! and `⌊(H′·2^σ + L + …) / 2^σ⌋ = H′ + ⌊(L + …) / 2^σ⌋`.
 
-use crate::stages::{DN_SCALE, ResidualInputs, ScratchRows, cut, cut_mut};
+use crate::stages::{DN_SCALE, ResidualInputs, ScratchRows, cut, cut_rows};
 
 /// `X², XY, Y²` and `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on columns `cols`, into
 /// product rows already cut to them (`stages::products_row`'s on the M4F);
 /// rows the memory
 /// cannot serve (never, once an engine has validated it) leave them
 /// untouched.
+#[cfg_attr(not(fpu_f32), allow(dead_code))] // the M4 set's; tested everywhere
 pub(crate) fn products_row(
     input: &ResidualInputs<'_>,
     [xx, xy, yy]: [&mut [i32]; 3],
@@ -47,29 +48,16 @@ pub(crate) fn products_row(
     // `p0` and `V` x one column wider either side; the rest as wide as the row.
     let first = start.wrapping_sub(1);
     let wide = |row| cut::<u8>(row, first, len + 2);
-    let at = |row| cut::<i32>(row, start, len);
     let (Some(up), Some(mid), Some(down), Some(vx)) =
         (wide(up), wide(mid), wide(down), cut(vx, first, len + 2))
     else {
         return;
     };
-    let (Some(vy_up), Some(vy), Some(vy_down), Some(d)) =
-        (at(vy_up), at(vy), at(vy_down), cut(d, start, len))
-    else {
-        return;
-    };
     let ScratchRows { gx, gy, high, low } = scratch;
-    let (Some(gx), Some(gy), Some(high), Some(low)) = (
-        cut_mut(gx, start, len),
-        cut_mut(gy, start, len),
-        cut_mut(high, start, len),
-        cut_mut(low, start, len),
-    ) else {
-        return;
-    };
+    cut_rows!(start, len => vy_up, vy, vy_down, d; mut gx, gy, high, low);
     // The M4F and M7 run two of the loops in assembly (`m4`).
     #[cfg(fpu_f32)]
-    crate::m4::gradients(up, mid, down, gx, gy);
+    crate::kernels::m4::gradients(up, mid, down, gx, gy);
     #[cfg(not(fpu_f32))]
     gradients_of(up, mid, down, gx, gy);
     int_products_of(gx, gy, xx, xy, yy);
@@ -79,7 +67,7 @@ pub(crate) fn products_row(
     if shift == 8 {
         residual_base_of::<8>(kappa, shift, p0, d, high, low);
         #[cfg(fpu_f32)]
-        crate::m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
+        crate::kernels::m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
         #[cfg(not(fpu_f32))]
         residual_products_of::<8>(shift, gx, gy, vx, vy, high, low, xd, yd);
     } else {
@@ -143,14 +131,7 @@ pub(crate) fn gradient_column([up, mid, down]: [&[u8]; 3], k: usize) -> (i32, i3
 #[inline(never)]
 fn int_products_of(gx: &[i16], gy: &[i16], xx: &mut [i32], xy: &mut [i32], yy: &mut [i32]) {
     let len = xx.len();
-    let (Some(gx), Some(gy), Some(xy), Some(yy)) = (
-        gx.get(..len),
-        gy.get(..len),
-        xy.get_mut(..len),
-        yy.get_mut(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => gx, gy; mut xy, yy);
     for i in 0..len {
         one_column_a_step();
         let (x, y) = (i32::from(gx[i]), i32::from(gy[i]));
@@ -202,9 +183,7 @@ fn residual_base_of<const S: u32>(
 ) {
     let shift = if S == 0 { shift } else { S };
     let len = high.len();
-    let (Some(p0), Some(d), Some(low)) = (p0.get(..len), d.get(..len), low.get_mut(..len)) else {
-        return;
-    };
+    cut_rows!(len => p0, d; mut low);
     let rounding = (1 << (shift - 1)) - 1;
     let mask = (1u32 << shift) - 1;
     for i in 0..len {
@@ -232,17 +211,7 @@ pub(crate) fn residual_products_of<const S: u32>(
     yd: &mut [f32],
 ) {
     let len = xd.len();
-    let (Some(gx), Some(gy), Some(vx), Some(vy), Some(high), Some(low), Some(yd)) = (
-        gx.get(..len),
-        gy.get(..len),
-        vx.get(..len),
-        vy.get(..len),
-        high.get(..len),
-        low.get(..len),
-        yd.get_mut(..len),
-    ) else {
-        return;
-    };
+    cut_rows!(len => gx, gy, vx, vy, high, low; mut yd);
     let wide = |a: i32, b: i32| i64::from(a) * i64::from(b);
     for i in 0..len {
         one_column_a_step();
@@ -308,9 +277,12 @@ mod tests {
                 );
                 let (mut got_i, mut got_f) = (want_i.clone(), want_f.clone());
                 // Product rows cut to the columns, as `stages::products_row` hands them.
-                let [xx, xy, yy] = want_i.each_mut().map(|r| &mut r[cols.clone()]);
-                let [xd, yd] = want_f.each_mut().map(|r| &mut r[cols.clone()]);
-                portable_products_row(&input, xx, xy, yy, xd, yd, cols.clone());
+                portable_products_row(
+                    &input,
+                    want_i.each_mut().map(|r| &mut r[cols.clone()]),
+                    want_f.each_mut().map(|r| &mut r[cols.clone()]),
+                    cols.clone(),
+                );
                 let (mut gx, mut gy, mut high, mut low) = (
                     std::vec![0; n],
                     std::vec![0; n],

@@ -22,6 +22,86 @@
 //! registers it names; one saves `r7` on the stack while it counts there.
 #![allow(unsafe_code)]
 
+use core::ops::Range;
+
+use super::{KernelSet, PlanarSums, wide_products};
+use crate::ByteScale;
+use crate::stages::{Binomial, ProductRows, ResidualInputs};
+use crate::tail::{TailConstants, TailOut, TailRows};
+
+/// The M4F's and M7's set: the loops below, the structure products of
+/// [`wide_products`], the structure sums in the portable layout.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct M4;
+
+impl KernelSet for M4 {
+    type Sums<'m> = PlanarSums<'m>;
+
+    #[inline(always)]
+    fn binomial_exact(binomial: Binomial<'_, i32>) {
+        match binomial {
+            Binomial::Rows(rows, out) => binomial_i32(rows, out),
+            Binomial::Taps(taps, out) => running_binomial_i32(taps, out),
+        }
+    }
+
+    #[inline(always)]
+    fn binomial_float(binomial: Binomial<'_, f32>) {
+        match binomial {
+            Binomial::Rows(rows, out) => binomial_f32(rows, out),
+            Binomial::Taps(taps, out) => sliding_binomial_f32(taps, out),
+        }
+    }
+
+    #[inline(always)]
+    fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) -> bool {
+        vertical_parts(d, v)
+    }
+
+    #[inline(always)]
+    fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
+        wide_products::products_row(input, rows.ints, rows.floats, rows.scratch, cols);
+    }
+
+    /// The magnitudes a loop each, in assembly; the fields' rows in the
+    /// portable loop.
+    #[inline(always)]
+    fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
+        if let TailOut {
+            m: [m_d, m_c],
+            fields: None,
+        } = out
+        {
+            let TailRows {
+                abc: [a, b, c],
+                pq: [p, q],
+                v: [vx, vy],
+            } = *rows;
+            let units = [k.units.det_floor, k.units.v_d];
+            divergence_free_magnitudes(k.lambda4, units, a, b, c, p, q, m_d);
+            curl_free_magnitudes(k.units.v_c, vx, vy, m_c);
+            return;
+        }
+        crate::tail::tail_row(k, rows, out);
+    }
+
+    /// For as many pixels as all the rows hold.
+    #[inline(always)]
+    fn rgb_pixels(
+        m_d: &[f32],
+        m_c: &[f32],
+        luma: &[u8],
+        [scale_d, scale_c]: [&ByteScale; 2],
+        out: &mut [[u8; 3]],
+    ) {
+        let n = out.len().min(m_d.len()).min(m_c.len()).min(luma.len());
+        let (Some(out), Some(luma)) = (out.get_mut(..n), luma.get(..n)) else {
+            return;
+        };
+        rgb_row([m_d, m_c], luma, [scale_d.parts(), scale_c.parts()], out);
+    }
+}
+
 /// Whether every row the assembly reads holds the `n` elements it reads
 /// (a row shorter than its loop leaves the output untouched).
 fn hold(lens: &[usize], n: usize) -> bool {
@@ -648,7 +728,7 @@ pub(crate) fn residual_products_8(
 /// column, two columns a step (the carried values move back into place at
 /// the step's end). Rows shorter than `gx` leave it untouched.
 pub(crate) fn gradients(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
-    use crate::wide_products::{gradient_column, gradient_rows};
+    use crate::kernels::wide_products::{gradient_column, gradient_rows};
     let len = gx.len();
     let (Some(rows), Some(gy)) = (gradient_rows([up, mid, down], len), gy.get_mut(..len)) else {
         return;

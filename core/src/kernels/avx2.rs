@@ -36,10 +36,12 @@ use core::arch::x86_64::{
     _mm256_slli_epi32, _mm256_sqrt_ps, _mm256_storeu_ps, _mm256_storeu_si256, _mm256_sub_ps,
 };
 
-use crate::schedule::{HALO, SUM_DEPTH};
-use crate::stages::Sample;
+use super::{KernelSet, OutputRow, Products, SumRings};
+use crate::ring::take;
+use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
+use crate::stages::{FLOAT_CHANNELS, INT_CHANNELS, Sample};
 use crate::tail::{TailConstants, TailOut};
-use crate::{Extremes, ExtremesSink};
+use crate::{Extremes, ExtremesSink, Job};
 
 /// Proof that the CPU runs AVX2 and FMA. Give it to a job
 /// ([`Job::with_avx2`](crate::Job::with_avx2)) and the engine runs the
@@ -61,12 +63,74 @@ impl Avx2 {
     }
 }
 
+impl Job<'_> {
+    /// The same job, its structure sums and tail run in AVX2 lanes (the
+    /// same bytes): for hosts that found AVX2 and FMA at run time.
+    pub fn with_avx2(self, avx2: Avx2) -> Self {
+        self.with_kernels(super::Choice { avx2: Some(avx2) })
+    }
+}
+
+/// The AVX2 set: the portable row kernels, the structure sums in blocks
+/// ([`BlockedSums`]) and the tail in lanes.
+impl KernelSet for Avx2 {
+    type Sums<'m> = BlockedSums<'m>;
+}
+
+/// The sums' rings in blocks (module doc): the integer channels' ring and
+/// the `f32` ones', each `SUM_DEPTH · K · cols` values for `K` channels
+/// (the memory of the portable layout's rings), and the token.
+pub(crate) struct BlockedSums<'m> {
+    avx2: Avx2,
+    ints: &'m mut [i32],
+    floats: &'m mut [f32],
+}
+
+impl<'m> SumRings<'m, Avx2> for BlockedSums<'m> {
+    #[inline(always)]
+    fn carve(
+        avx2: Avx2,
+        words: &mut &'m mut [i32],
+        floats: &mut &'m mut [f32],
+        cols: usize,
+    ) -> Self {
+        Self {
+            avx2,
+            ints: take(words, SUM_DEPTH * INTS * cols),
+            floats: take(floats, SUM_DEPTH * FLOATS * cols),
+        }
+    }
+
+    #[inline(always)]
+    fn store_row(&mut self, t: usize, (ints, floats): Products<'_, 'm>, n: usize) {
+        let ints = ints.each_ref().map(|row| &row[..]);
+        let floats = floats.each_ref().map(|row| &row[..]);
+        let rings = (&mut *self.ints, &mut *self.floats, t % SUM_DEPTH);
+        horizontal_sums(self.avx2, ints, floats, rings, n);
+    }
+
+    /// The vertical `G` is the tail's own, from the blocks.
+    #[inline(always)]
+    fn tail_row(&mut self, row: OutputRow<'_, 'm>, out: TailOut<'_>) -> Option<ExtremesSink> {
+        let OutputRow {
+            o, v, constants, ..
+        } = row;
+        let rows = BlockedRows {
+            ints: self.ints,
+            floats: self.floats,
+            first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
+            v,
+        };
+        Some(tail_row(self.avx2, constants, &rows, out))
+    }
+}
+
 /// Output columns a block: one AVX2 vector of each channel of each row.
 const BLOCK: usize = 8;
 
 /// Integer channels (`X², XY, Y²`) and `f32` channels (`X·Dn′`, `Y·Dn′`).
-const INTS: usize = 3;
-const FLOATS: usize = 2;
+const INTS: usize = INT_CHANNELS;
+const FLOATS: usize = FLOAT_CHANNELS;
 
 /// Values a block of a ring of `K` channels: output column `8b + j` of
 /// channel `ch` of the row in slot `s` (window row `t` is in slot

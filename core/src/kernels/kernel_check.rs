@@ -19,11 +19,12 @@ pub fn run() -> Result<usize, &'static str> {
 #[cfg(fpu_f32)]
 mod m4 {
     use super::LEN;
-    use crate::m4;
+    use crate::kernels::m4;
+    use crate::kernels::wide_products;
     use crate::sink::portable_rgb_tail;
     use crate::stages::{binomial_of, running_binomial, sliding_binomial, vertical_parts_of};
-    use crate::tail::{TailConstants, TailOut, TailRows, tail_row_portable};
-    use crate::{ByteScale, Config, IntensityScale, Params, wide_products};
+    use crate::tail::{TailConstants, TailOut, TailRows, tail_row as tail_row_portable};
+    use crate::{ByteScale, Config, IntensityScale, Params};
     use fixed::types::U16F16;
 
     /// xorshift64: values across a range, and its ends one time in four.
