@@ -600,8 +600,9 @@ impl<K: KernelSet> Pass<'_, K> {
             constants: &constants,
         };
         // The row's place in the frame, worked out where each call needs it:
-        // held across the tail, it cost the M4 registers (445 → 451 per
-        // pixel at 320×240, `scripts/embedded-check`).
+        // held across the tail, it cost the Cortex-M4F's registers (445 → 451
+        // per pixel at 320×240, `scripts/embedded-check`; its kernels:
+        // `kernels/m4.rs`).
         let at = || {
             (
                 (y_first + o as isize) as usize,

@@ -322,8 +322,8 @@ fn horizontal_parts(
         return;
     };
     // One loop per component: one for both kept 20 row pointers live,
-    // which the M4 spilled (61 instructions per pixel against 45,
-    // `scripts/embedded-check`).
+    // which the Cortex-M4F spilled (61 instructions per pixel against 45,
+    // `scripts/embedded-check`; its kernels: `kernels/m4.rs`).
     let ([a, b, c, d, e], [f, g, h, i, j]) = (v1, v2);
     component_of(boundary_minus_domain_x, a, b, c, d, e, f, g, h, i, j, ex);
     let ([a, b, c, d, e], [f, g, h, i, j]) = (v3, v4);

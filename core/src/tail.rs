@@ -4,12 +4,13 @@
 //!
 //! Every step is one correctly rounded `f32` operation (`+ − × ÷ √` and
 //! conversions from `i32`), written in a fixed order: no fused
-//! multiply-add (Rust never contracts `a * b + c`; the M4's `VMLA` is the
-//! unfused form), no library function but the square root, which IEEE
+//! multiply-add (Rust never contracts `a * b + c`; the M4F's `VMLA`, `kernels/m4.rs`,
+//! is the unfused form), no library function but the square root, which IEEE
 //! rounds correctly too (`kernels::fpu::sqrt`). So the hardware floats of x86-64,
 //! aarch64 and the M4F and the software floats of the M0 and RV32 give the
 //! same bits, and the row loop takes vector lanes where the target has them
-//! (eight pixels per AVX2 instruction, `vdivps`, `vsqrtps`).
+//! (eight pixels per AVX2 instruction, `vdivps`, `vsqrtps`:
+//! `kernels/avx2.rs`).
 //!
 //! Formats and bounds (integer inputs exact, from `stages`):
 //!
