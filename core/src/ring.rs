@@ -14,9 +14,8 @@
 /// multiply and clamps of each of some 60 rows a pushed row, which memory
 /// of a run-time width cannot fold, cost the C API's firmware on the M4F
 /// (`kernels/m4.rs`) 3 % (320×240) to 5 % (160×120) more instructions than
-/// the Rust firmware's
-/// compile-time arrays, 2.4 % and 3.1 % this way; the slots (8 bytes each
-/// on 32-bit targets) fit the M0's 16 KiB stack.
+/// the Rust firmware's compile-time arrays, 2.4 % and 3.1 % this way; the
+/// slots (8 bytes each on 32-bit targets) fit the M0's 16 KiB stack.
 pub(crate) struct RowRing<'m, T, const DEPTH: usize> {
     #[cfg(vector_rows)]
     rows: &'m mut [T],
