@@ -398,7 +398,8 @@ struct Stream {
 }
 
 impl Stream {
-    /// Check `frame`'s shape; its luma, without the GIL held by `work`.
+    /// `work` on the pair stream, the worker and `frame`'s luma, without
+    /// the GIL; `frame` checked first (the stream's shape).
     fn take<'py, T: Send>(
         &mut self,
         py: Python<'py>,
@@ -444,7 +445,8 @@ impl Stream {
         Ok(arrays)
     }
 
-    /// The image of `(prev, next)` in a new buffer.
+    /// The computation the pair stream calls: the image of `(prev, next)`
+    /// in a new buffer.
     fn image(
         worker: &mut PairWorker,
         layout: Layout,
