@@ -202,17 +202,26 @@ pub fn pixels_on(
     Ok(extremes)
 }
 
-/// The planes of a [`FixedOutput`] from the core's pixels; every conversion
-/// is exact (`f32` to `f64`).
+/// One `f64` plane of a field of the core's pixels; exact (`f32` to `f64`).
+fn plane_of(pixels: &[FlowPixel], f: fn(&FlowPixel) -> f32) -> Vec<f64> {
+    pixels.iter().map(|p| f64::from(f(p))).collect()
+}
+
+/// The fields `v_c`, `v_d` of the core's pixels of a `width × height` frame.
+pub fn planes_of(width: usize, height: usize, pixels: &[FlowPixel]) -> FlowPlanes {
+    let field = |x, y| Flow::from_parts(width, height, plane_of(pixels, x), plane_of(pixels, y));
+    FlowPlanes {
+        v_c: field(|p| p.v_c[0], |p| p.v_c[1]),
+        v_d: field(|p| p.v_d[0], |p| p.v_d[1]),
+    }
+}
+
+/// The planes of a [`FixedOutput`] from the core's pixels.
 fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> FixedOutput {
-    let plane = |f: &dyn Fn(&FlowPixel) -> f32| pixels.iter().map(|p| f64::from(f(p))).collect();
     FixedOutput {
-        planes: FlowPlanes {
-            v_c: Flow::from_parts(width, height, plane(&|p| p.v_c[0]), plane(&|p| p.v_c[1])),
-            v_d: Flow::from_parts(width, height, plane(&|p| p.v_d[0]), plane(&|p| p.v_d[1])),
-        },
-        m_d: plane(&|p| p.m_d),
-        m_c: plane(&|p| p.m_c),
+        planes: planes_of(width, height, pixels),
+        m_d: plane_of(pixels, |p| p.m_d),
+        m_c: plane_of(pixels, |p| p.m_c),
         rep,
     }
 }

@@ -24,7 +24,7 @@ use crate::outputs::{OutputSpec, PairFields};
 use crate::page_buffer::ByteBuffer;
 use crate::pipeline::Compute;
 use crate::settings::Settings;
-use crate::{Flow, FlowPlanes, Gray, HostError};
+use crate::{Gray, HostError};
 
 /// The engine of a stream of pairs: settings checked once, and each
 /// thread's engine memory kept from pair to pair.
@@ -269,12 +269,8 @@ impl PairEngine {
             .map_err(crate::pipeline::tile_error)?;
         fixed_engine::pixels_on(self.threads, &plan, &frames, &mut self.pixels)?;
         let pixels = &self.pixels;
-        let plane = |f: fn(&FlowPixel) -> f32| pixels.iter().map(|p| f64::from(f(p))).collect();
         let fields = PairFields {
-            planes: FlowPlanes {
-                v_c: Flow::from_parts(width, height, plane(|p| p.v_c[0]), plane(|p| p.v_c[1])),
-                v_d: Flow::from_parts(width, height, plane(|p| p.v_d[0]), plane(|p| p.v_d[1])),
-            },
+            planes: fixed_engine::planes_of(width, height, &self.pixels),
             rep: Vec::new(),
         };
         rgb.copy_from_slice(&self.spec.image(&fields));

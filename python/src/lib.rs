@@ -23,7 +23,7 @@ use reynoldsflow_host::pair_stream::{self, PairStream};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
 use reynoldsflow_host::settings::FirstFrame;
-use reynoldsflow_host::{FlowPlanes, Gray, HostError, atomic, workers};
+use reynoldsflow_host::{Gray, HostError, atomic, workers};
 
 mod errors;
 mod frames;
@@ -32,13 +32,6 @@ mod settings;
 use errors::{Failure, guarded, host_error, value_error};
 use frames::{Frames, Output, gray};
 use settings::{CallSettings, Kwargs, Layout};
-
-/// The mean length of `v_R = v_c + v_d` over the frame, in pixels per
-/// frame: how much the pair moves (0 for identical frames); the host's
-/// definition, which WebDataset samples record too.
-fn mean_speed(planes: &FlowPlanes) -> f64 {
-    planes.mean_speed()
-}
 
 /// One thread's pair engine (the host's, on one thread: its memory kept
 /// from pair to pair), and the interleaved image a channels-first result
@@ -83,7 +76,7 @@ impl PairWorker {
         if score {
             let fields = self.engine.fields(prev, next)?;
             layout.place(&self.engine.image_of(&fields), out);
-            return Ok(mean_speed(&fields.planes));
+            return Ok(fields.planes.mean_speed());
         }
         match layout {
             Layout::Hwc => self.engine.image(prev, next, out)?,
@@ -218,7 +211,7 @@ fn motion_score<'py>(
     let settings = CallSettings::parse(Kwargs::new(py, "motion_score", options, &[])?)?;
     let (p, n) = pair_frames(prev, next)?;
     on_pair(py, &settings, (&p, &n), |worker, prev, next| {
-        Ok(mean_speed(&worker.engine.fields(prev, next)?.planes))
+        Ok(worker.engine.fields(prev, next)?.planes.mean_speed())
     })
 }
 
