@@ -30,6 +30,7 @@ pub fn flag(setting: Setting) -> &'static str {
         Setting::Fps => "--fps",
         Setting::Raw => "--raw",
         Setting::Shard => "--shard",
+        Setting::MaxPixels => "--max-pixels",
         _ => setting.name(),
     }
 }

@@ -167,7 +167,9 @@ fn max_pixels_sets_the_limit_and_help_states_the_default() {
         "100"
     ]);
     assert!(
-        stderr(&raw).contains("--raw: frame size 64x48"),
+        stderr(&raw).contains(
+            "--max-pixels: stdin: frame size 64x48 (3072 pixels) exceeds the limit of 100 pixels"
+        ),
         "{}",
         stderr(&raw)
     );

@@ -307,7 +307,7 @@ fn read_y4m_header(
         Ok(None) => return Err(input_error(name, "empty; expected a Y4M header")),
         Err(e) => return Err(input_error(name, e)),
     };
-    let header = y4m::parse_header(&line).map_err(|e| input_error(name, e))?;
+    let header = y4m::parse_header(&line).map_err(|e| e.about(name))?;
     if header.chroma != "444" {
         return Err(input_error(
             name,

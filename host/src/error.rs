@@ -31,9 +31,12 @@ pub enum ImageProblem {
     #[error("cannot decode: {0}")]
     Decode(String),
     /// The header states a frame larger than the pixel limit
-    /// ([`crate::limits`]); nothing of its size was allocated.
+    /// ([`crate::limits`]); nothing of its size was allocated. Reading a
+    /// file, the host reports it as [`TooLarge::about`] the file.
+    ///
+    /// [`TooLarge::about`]: crate::limits::TooLarge::about
     #[error("{0}")]
-    TooLarge(String),
+    TooLarge(crate::limits::TooLarge),
 }
 
 /// Everything that can go wrong on the host side.

@@ -124,20 +124,26 @@ fn gray_or_empty(gray: Result<Gray, HostError>) -> Result<Gray, ImageProblem> {
 /// Read an 8-bit image file as a gray frame.
 pub fn read_gray(path: &Path) -> Result<Gray, HostError> {
     let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
-    decode_gray(&bytes).map_err(|problem| HostError::Image {
-        path: path.to_owned(),
-        problem,
-    })
+    decode_gray(&bytes).map_err(|problem| image_error(path, problem))
+}
+
+/// The error of refusing the image file `path`: one over the size limit
+/// names the limit's setting ([`limits::TooLarge::about`]).
+fn image_error(path: &Path, problem: ImageProblem) -> HostError {
+    match problem {
+        ImageProblem::TooLarge(too_large) => too_large.about(path.display()),
+        problem => HostError::Image {
+            path: path.to_owned(),
+            problem,
+        },
+    }
 }
 
 /// Read an RGB8 image file (a representation), exactly as stored; any
 /// other pixel layout is refused.
 pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
     let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
-    let refuse = |problem| HostError::Image {
-        path: path.to_owned(),
-        problem,
-    };
+    let refuse = |problem| image_error(path, problem);
     match decode(&bytes).map_err(refuse)? {
         DynamicImage::ImageRgb8(b) => Ok(Rgb8 {
             width: b.width() as usize,

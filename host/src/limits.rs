@@ -4,11 +4,15 @@
 //! allocator gives up. Every reader checks the size it is told against
 //! [`max_pixels`] first.
 //!
-//! The limit is one setting of the process, made once from the command
-//! line (`--max-pixels`) before any input is opened, so the readers deep
-//! in the sequence sources need no extra parameter.
+//! The limit is one setting of the process ([`Setting::MaxPixels`]), made
+//! once by the front end (the CLI's `--max-pixels`, Python's
+//! `set_max_pixels`) before any input is opened, so the readers deep in the
+//! sequence sources need no extra parameter.
 
 use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::HostError;
+use crate::settings::Setting;
 
 /// The default limit: 8192 × 8192 pixels (an 8K UHD frame, 7680 × 4320,
 /// is half of it). A gray frame of that size is 64 MiB.
@@ -26,17 +30,52 @@ pub fn set_max_pixels(n: u64) {
     MAX_PIXELS.store(n.max(1), Ordering::Relaxed);
 }
 
-/// `Err(message)` when a `width × height` frame exceeds the limit (or
-/// its pixel count overflows).
-pub fn check_frame_size(width: usize, height: usize) -> Result<(), String> {
-    let max = max_pixels();
+/// A frame larger than the limit: what a reader was told, refused before
+/// anything of its size was allocated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TooLarge {
+    /// The size the input states.
+    pub width: usize,
+    /// The size the input states.
+    pub height: usize,
+    /// The limit in force.
+    pub limit: u64,
+}
+
+impl TooLarge {
+    /// The host's error about `subject` (the input that states the size):
+    /// the [`Setting::MaxPixels`] at fault, which each front end names as
+    /// its users set it (the CLI's `--max-pixels`).
+    pub fn about(self, subject: impl std::fmt::Display) -> HostError {
+        HostError::setting(
+            Setting::MaxPixels,
+            format!("{subject}: {self}; raise the limit if the input really is that large"),
+        )
+    }
+}
+
+impl std::fmt::Display for TooLarge {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (width, height) = (self.width, self.height);
+        match (width as u64).checked_mul(height as u64) {
+            Some(n) => write!(f, "frame size {width}x{height} ({n} pixels)"),
+            None => write!(f, "frame size {width}x{height} (too many pixels)"),
+        }?;
+        write!(f, " exceeds the limit of {} pixels", self.limit)
+    }
+}
+
+/// `Err` when a `width × height` frame exceeds the limit (or its pixel
+/// count overflows).
+pub fn check_frame_size(width: usize, height: usize) -> Result<(), TooLarge> {
+    let limit = max_pixels();
     match (width as u64).checked_mul(height as u64) {
-        Some(n) if n <= max => Ok(()),
-        n => Err(format!(
-            "frame size {width}x{height} ({} pixels) exceeds the limit of {max} pixels; \
-             if the input really is that large, raise it with --max-pixels",
-            n.map_or_else(|| "too many".to_owned(), |n| n.to_string())
-        )),
+        Some(n) if n <= limit => Ok(()),
+        _ => Err(TooLarge {
+            width,
+            height,
+            limit,
+        }),
     }
 }
 
@@ -49,8 +88,12 @@ mod tests {
         assert_eq!(max_pixels(), DEFAULT_MAX_PIXELS);
         assert!(check_frame_size(8192, 8192).is_ok());
         let err = check_frame_size(8192, 8193).unwrap_err();
-        assert!(err.contains("8192x8193 (67117056 pixels)"), "{err}");
-        assert!(err.contains("--max-pixels"), "{err}");
-        assert!(check_frame_size(usize::MAX, usize::MAX).is_err());
+        assert_eq!(
+            err.about("a.png").to_string(),
+            "max_pixels: a.png: frame size 8192x8193 (67117056 pixels) exceeds the limit of \
+             67108864 pixels; raise the limit if the input really is that large"
+        );
+        let err = check_frame_size(usize::MAX, usize::MAX).unwrap_err();
+        assert!(err.to_string().contains("(too many pixels)"), "{err}");
     }
 }

@@ -198,6 +198,8 @@ pub enum Setting {
     CueThreshold,
     /// Cues: the fewest moving pixels a region holds.
     CueMinArea,
+    /// The most pixels an input frame may have ([`crate::limits`]).
+    MaxPixels,
 }
 
 impl Setting {
@@ -228,6 +230,7 @@ impl Setting {
             Setting::Shard => "shard",
             Setting::CueThreshold => "cue_threshold",
             Setting::CueMinArea => "cue_min_area",
+            Setting::MaxPixels => "max_pixels",
         }
     }
 }

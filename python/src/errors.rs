@@ -37,6 +37,7 @@ fn keyword(setting: Setting) -> &'static str {
     match setting {
         Setting::Lambda => "lam",
         Setting::Rep => "rep=False",
+        Setting::MaxPixels => "set_max_pixels",
         setting => setting.name(),
     }
 }

@@ -490,13 +490,8 @@ impl Stream {
                 reynoldsflow_core::MAX_SIDE
             )));
         }
-        // (The host's message names the command line's --max-pixels.)
-        if reynoldsflow_host::limits::check_frame_size(width, height).is_err() {
-            return Err(value_error(format!(
-                "Stream: {width}x{height}: more than the {} pixels a frame may have",
-                reynoldsflow_host::limits::max_pixels()
-            )));
-        }
+        reynoldsflow_host::limits::check_frame_size(width, height)
+            .map_err(|too_large| host_error(too_large.about("Stream")))?;
         Ok(Self {
             width,
             height,
@@ -881,6 +876,25 @@ fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) 
     .map_err(Failure::into_pyerr)
 }
 
+/// set_max_pixels(n)
+///
+/// The most pixels (width x height) a frame of this process may have, at
+/// least 1; default 8192 x 8192. Every reader (image files, Y4M, raw,
+/// video) and ``Stream`` refuse a larger frame before allocating it, the
+/// command line's ``--max-pixels``.
+#[pyfunction]
+fn set_max_pixels(n: u64) {
+    reynoldsflow_host::limits::set_max_pixels(n);
+}
+
+/// max_pixels() -> int
+///
+/// The limit ``set_max_pixels`` sets.
+#[pyfunction]
+fn max_pixels() -> u64 {
+    reynoldsflow_host::limits::max_pixels()
+}
+
 /// ReynoldsFlow: curl-free and divergence-free motion fields of frame
 /// pairs, and their RGB representation [|v_d|, |v_c|, frame n], computed by
 /// the same code as the `reynoldsflow` command line (same bytes).
@@ -923,6 +937,8 @@ fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_as_ndarray, m)?)?;
     m.add_class::<FrameReader>()?;
     m.add_function(wrap_pyfunction!(read_flo, m)?)?;
+    m.add_function(wrap_pyfunction!(set_max_pixels, m)?)?;
+    m.add_function(wrap_pyfunction!(max_pixels, m)?)?;
     m.add_function(wrap_pyfunction!(write_flo, m)?)?;
     m.add_class::<Stream>()?;
     Ok(())

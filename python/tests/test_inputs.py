@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import reynoldsflow as rf
-from conftest import clip, moving_frame
+from conftest import clip, moving_frame, write_pgm
 
 
 def layouts(frame):
@@ -145,7 +145,7 @@ def test_wrong_shapes_and_values_raise_value_error(tmp_path):
 
 
 def test_flo_round_trip_and_cli_flo(cli, tmp_path):
-    from conftest import run_cli, write_pgm
+    from conftest import run_cli
 
     flow = np.random.default_rng(3).normal(size=(5, 7, 2))
     rf.write_flo(tmp_path / "a.flo", flow)
@@ -171,6 +171,25 @@ def test_a_stream_too_large_for_the_engine_is_refused_when_made():
             rf.Stream(w, h)
         # No command-line flag in a Python message.
         assert "--" not in str(refused.value), refused.value
+
+
+def test_the_pixel_limit_is_set_and_named_as_python_sets_it(tmp_path):
+    write_pgm(tmp_path / "a.pgm", moving_frame(30, 20, 0))
+    write_pgm(tmp_path / "b.pgm", moving_frame(30, 20, 1))
+    default = rf.max_pixels()
+    assert default == 8192 * 8192
+    try:
+        rf.set_max_pixels(599)
+        assert rf.max_pixels() == 599
+        for call in (lambda: list(rf.read_frames(tmp_path)), lambda: rf.Stream(30, 20)):
+            with pytest.raises(ValueError, match="exceeds the limit of 599 pixels") as refused:
+                call()
+            assert str(refused.value).startswith("set_max_pixels: "), refused.value
+            assert "--" not in str(refused.value), refused.value
+        rf.set_max_pixels(600)
+        assert len(list(rf.read_frames(tmp_path))) == 2
+    finally:
+        rf.set_max_pixels(default)
 
 
 def test_a_meta_tensor_is_the_modules_type_error():

@@ -36,7 +36,7 @@ impl RawSource {
                 format!("{width}x{height} is not a usable frame size"),
             ));
         }
-        limits::check_frame_size(width, height).map_err(|e| HostError::setting(Setting::Raw, e))?;
+        limits::check_frame_size(width, height).map_err(|e| e.about(name.display()))?;
         Ok(Self {
             name,
             reader,

@@ -307,7 +307,9 @@ fn gcd(mut a: u128, mut b: u128) -> u128 {
 /// `out` (reusing its memory); `frame` itself when the size is its own.
 pub fn resize_gray(frame: &Gray, size: FrameSize, out: &mut Gray) -> Result<(), HostError> {
     let (w, h) = size.of(frame.width, frame.height);
-    limits::check_frame_size(w, h).map_err(|e| HostError::setting(Setting::Resize, e))?;
+    // The size asked for, not an input's: the resize is at fault.
+    limits::check_frame_size(w, h)
+        .map_err(|e| HostError::setting(Setting::Resize, e.to_string()))?;
     let resize = Resize::new(frame.width, frame.height, w, h)
         .map_err(|e| HostError::setting(Setting::Resize, e.to_string()))?;
     out.pixels.resize(w * h, 0);

@@ -6,7 +6,7 @@
 //! sample (`C420p10`, `Cmono16`, …) are refused by name.
 
 use std::io::{BufRead, Read};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::{Frame, FrameSource, input_error, read_full, write_index_stem};
 use crate::{HostError, limits};
@@ -57,12 +57,37 @@ fn extra_bytes(chroma: &str, w: usize, h: usize) -> Option<usize> {
     })
 }
 
+/// Why a header line was refused.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum HeaderError {
+    /// Not a Y4M header, or one this reader does not take.
+    Invalid(String),
+    /// A frame over the size limit.
+    TooLarge(limits::TooLarge),
+}
+
+impl HeaderError {
+    /// The host's error about the input `name`.
+    pub fn about(self, name: &Path) -> HostError {
+        match self {
+            HeaderError::Invalid(problem) => input_error(name, problem),
+            HeaderError::TooLarge(too_large) => too_large.about(name.display()),
+        }
+    }
+}
+
+impl From<String> for HeaderError {
+    fn from(problem: String) -> Self {
+        HeaderError::Invalid(problem)
+    }
+}
+
 /// Parse the header line (without its newline).
-pub fn parse_header(line: &[u8]) -> Result<Header, String> {
+pub fn parse_header(line: &[u8]) -> Result<Header, HeaderError> {
     let text = std::str::from_utf8(line).map_err(|_| "the Y4M header is not text".to_owned())?;
     let mut tokens = text.split(' ').filter(|t| !t.is_empty());
     if tokens.next() != Some("YUV4MPEG2") {
-        return Err("not a Y4M stream (no YUV4MPEG2 header)".to_owned());
+        return Err("not a Y4M stream (no YUV4MPEG2 header)".to_owned().into());
     }
     let (mut width, mut height, mut frame_rate) = (None, None, None);
     let mut chroma = "420jpeg".to_owned();
@@ -85,19 +110,21 @@ pub fn parse_header(line: &[u8]) -> Result<Header, String> {
         }
     }
     let (Some(width), Some(height)) = (width, height) else {
-        return Err("the Y4M header lacks a valid width (W) or height (H)".to_owned());
+        return Err("the Y4M header lacks a valid width (W) or height (H)"
+            .to_owned()
+            .into());
     };
-    limits::check_frame_size(width, height)?;
+    limits::check_frame_size(width, height).map_err(HeaderError::TooLarge)?;
     let extra_bytes = match extra_bytes(&chroma, width, height) {
         Some(n) => n,
         None => {
-            return Err(match sample_bits(&chroma) {
+            return Err(HeaderError::Invalid(match sample_bits(&chroma) {
                 Some(bits) if bits > 8 => format!(
                     "colour space C{chroma} has {bits}-bit samples; only 8-bit Y4M is supported \
                      (convert with e.g. ffmpeg -i in.y4m -pix_fmt gray -f yuv4mpegpipe out.y4m)"
                 ),
                 _ => format!("unknown Y4M colour space C{chroma}"),
-            });
+            }));
         }
     };
     Ok(Header {
@@ -160,7 +187,7 @@ impl Y4mSource {
             Ok(None) => return Err(input_error(name, "empty input; expected a Y4M header")),
             Err(e) => return Err(input_error(name, e)),
         };
-        let header = parse_header(&line).map_err(|e| input_error(&name, e))?;
+        let header = parse_header(&line).map_err(|e| e.about(&name))?;
         // With bare FRAME lines, each frame takes 6 + Y + extra bytes.
         let per_frame = 6 + header.width * header.height + header.extra_bytes;
         let count_hint = file_len.map(|len| {

@@ -317,6 +317,14 @@ def read_frames(
     step, fps, resize and short_side applied; max_frames counts the frames
     taken."""
 
+def set_max_pixels(n: int) -> None:
+    """The most pixels (width x height) a frame of this process may have,
+    at least 1 (default 8192 x 8192): readers and ``Stream`` refuse a larger
+    frame before allocating it, as the command line's ``--max-pixels``."""
+
+def max_pixels() -> int:
+    """The limit ``set_max_pixels`` sets."""
+
 def read_flo(path: Path) -> npt.NDArray[np.float32]:
     """A Middlebury .flo file as an (H, W, 2) float32 array, last axis (u, v)."""
 
