@@ -31,6 +31,7 @@ pub fn flag(setting: Setting) -> &'static str {
         Setting::Raw => "--raw",
         Setting::Shard => "--shard",
         Setting::MaxPixels => "--max-pixels",
+        Setting::FilesFrom => "--files-from",
         _ => setting.name(),
     }
 }

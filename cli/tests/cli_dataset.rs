@@ -565,4 +565,22 @@ fn files_from_takes_the_listed_items_only() {
         "{}",
         stderr(&res)
     );
+    // A list needs a folder to be relative to; the message names the flag.
+    let clip = src.join("class/clip3.y4m");
+    let res = run(&args![
+        "dataset",
+        &clip,
+        tmp.path().join("y"),
+        "--files-from",
+        list
+    ]);
+    assert_eq!(res.status.code(), Some(1));
+    assert!(
+        stderr(&res).contains(&format!(
+            "--files-from: lists paths relative to the source, which must then be a folder: {} is not",
+            clip.display()
+        )),
+        "{}",
+        stderr(&res)
+    );
 }

@@ -200,6 +200,8 @@ pub enum Setting {
     CueMinArea,
     /// The most pixels an input frame may have ([`crate::limits`]).
     MaxPixels,
+    /// A dataset's items listed, relative to its source folder.
+    FilesFrom,
 }
 
 impl Setting {
@@ -231,6 +233,7 @@ impl Setting {
             Setting::CueThreshold => "cue_threshold",
             Setting::CueMinArea => "cue_min_area",
             Setting::MaxPixels => "max_pixels",
+            Setting::FilesFrom => "files_from",
         }
     }
 }

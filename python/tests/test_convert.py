@@ -89,6 +89,9 @@ def test_dataset_items_follow_a_manifest(tmp_path):
         rf.dataset_items(src, files_from=[str(tmp_path / "elsewhere.y4m")])
     with pytest.raises(TypeError, match="a manifest's path or a list of paths, not int"):
         rf.dataset_items(src, files_from=3)
+    # A list needs a folder to be relative to; the message names the keyword.
+    with pytest.raises(ValueError, match="^files_from: lists paths relative to the source, which must then be a folder"):
+        rf.dataset_items(src / "a" / "short.y4m", files_from=["seq1"])
 
 
 def test_ray_recipe_outputs_equal_the_cli_dataset(cli, tmp_path):

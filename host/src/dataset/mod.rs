@@ -253,9 +253,12 @@ pub fn listed<'a>(
     paths: impl IntoIterator<Item = (String, &'a Path)>,
 ) -> Result<Vec<Item>, HostError> {
     if !src.is_dir() {
-        return Err(input_error(
-            src,
-            "--files-from lists paths relative to SRC, so SRC must be a folder",
+        return Err(HostError::setting(
+            Setting::FilesFrom,
+            format!(
+                "lists paths relative to the source, which must then be a folder: {} is not",
+                src.display()
+            ),
         ));
     }
     let mut items = Vec::new();
