@@ -22,7 +22,7 @@ use reynoldsflow_host::pair_engine::PairEngine;
 use reynoldsflow_host::pair_stream::{self, PairStream};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
-use reynoldsflow_host::settings::FirstFrame;
+use reynoldsflow_host::settings::{FirstFrame, Setting};
 use reynoldsflow_host::{Gray, HostError, atomic, workers};
 
 mod errors;
@@ -879,12 +879,19 @@ fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) 
 /// set_max_pixels(n)
 ///
 /// The most pixels (width x height) a frame of this process may have, at
-/// least 1; default 8192 x 8192. Every reader (image files, Y4M, raw,
-/// video) and ``Stream`` refuse a larger frame before allocating it, the
-/// command line's ``--max-pixels``.
+/// least 1 (``ValueError`` otherwise); default 8192 x 8192. Every reader
+/// (image files, Y4M, raw, video) and ``Stream`` refuse a larger frame
+/// before allocating it, as the command line's ``--max-pixels``.
 #[pyfunction]
-fn set_max_pixels(n: u64) {
+fn set_max_pixels(n: i64) -> PyResult<()> {
+    let n = u64::try_from(n).ok().filter(|&n| n >= 1).ok_or_else(|| {
+        host_error(HostError::setting(
+            Setting::MaxPixels,
+            format!("{n} pixels; the limit is at least 1"),
+        ))
+    })?;
     reynoldsflow_host::limits::set_max_pixels(n);
+    Ok(())
 }
 
 /// max_pixels() -> int

@@ -188,6 +188,10 @@ def test_the_pixel_limit_is_set_and_named_as_python_sets_it(tmp_path):
             assert "--" not in str(refused.value), refused.value
         rf.set_max_pixels(600)
         assert len(list(rf.read_frames(tmp_path))) == 2
+        for bad in (0, -1):
+            with pytest.raises(ValueError, match=f"^set_max_pixels: {bad} pixels; the limit is at least 1"):
+                rf.set_max_pixels(bad)
+        assert rf.max_pixels() == 600
     finally:
         rf.set_max_pixels(default)
 
