@@ -31,7 +31,6 @@ use crate::{Gray, HostError};
 pub struct PairEngine {
     compute: Compute,
     spec: OutputSpec,
-    threads: usize,
     /// Keep every pixel's magnitudes ([`Self::magnitudes`]).
     keep: bool,
     /// This thread's engine memory and kept planes.
@@ -89,7 +88,6 @@ impl PairEngine {
                 hsv_max: settings.hsv_max,
                 ..OutputSpec::default()
             },
-            threads,
             keep: false,
             engine: FrameEngine::new(),
             helpers: (1..threads).map(|_| HostEngine::new()).collect(),
@@ -109,7 +107,7 @@ impl PairEngine {
 
     /// Threads that compute each pair.
     pub fn threads(&self) -> usize {
-        self.threads
+        self.helpers.len() + 1
     }
 
     /// The image of the pair `(prev, next)` (the variant's, RGB8, packed)
@@ -145,7 +143,7 @@ impl PairEngine {
         if self.spec.image_needs_fields() {
             return self.wheel(prev, next, params, rgb);
         }
-        if self.threads == 1 && !self.keep {
+        if self.helpers.is_empty() && !self.keep {
             // `run`'s path, to the byte.
             self.compute
                 .representation(&mut self.engine, prev, next, &mut Exact(rgb))?;
@@ -194,7 +192,7 @@ impl PairEngine {
     fn tile(&self, width: usize, height: usize) -> (usize, usize) {
         match self.compute.tile() {
             Some(t) => (t.width, t.height),
-            None => balanced_tile(width, height, self.threads),
+            None => balanced_tile(width, height, self.threads()),
         }
     }
 
@@ -266,10 +264,10 @@ impl PairEngine {
         let (width, height) = prev.size();
         let (plan, frames) = prepare(prev, next, params, Some(self.tile(width, height)))
             .map_err(crate::pipeline::tile_error)?;
-        fixed_engine::pixels_on(self.threads, &plan, &frames, &mut self.pixels)?;
+        fixed_engine::pixels_on(self.threads(), &plan, &frames, &mut self.pixels)?;
         let pixels = &self.pixels;
         let fields = PairFields {
-            planes: fixed_engine::planes_of(width, height, &self.pixels),
+            planes: fixed_engine::planes_of(width, height, pixels),
             rep: Vec::new(),
         };
         rgb.copy_from_slice(&self.spec.image(&fields));
