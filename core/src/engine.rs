@@ -56,9 +56,9 @@ pub trait Sink {
     /// is their `fⁿ`, and `extremes` the least and greatest value of each
     /// of the two rows, which SPEC §4's per-frame min–max reads over the
     /// frame: a sink that keeps them merges these
-    /// ([`ExtremesSink::merge`](crate::ExtremesSink::merge)) instead of
-    /// reading the rows again (every kernel set gives them; some find them
-    /// as they write the rows).
+    /// ([`ExtremesSink::merge`]) instead of reading the rows again (the
+    /// engine gives them for every row; some kernel sets find them as they
+    /// write the rows).
     fn kept_row(&mut self, y: usize, x: usize, luma: &[u8], extremes: ExtremesSink) {
         let _ = (y, x, luma, extremes);
     }

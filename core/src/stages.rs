@@ -263,10 +263,7 @@ fn vertical_parts<K: KernelSet>(
     let [d0, d1, d2, d3, d4] = d;
     cut_rows!(cols.start, cols.len() => d0, d1, d2, d3, d4);
     cut_rows!(cols.start, cols.len() => ; mut v1, v2, v3, v4);
-    if K::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]) {
-        return;
-    }
-    vertical_parts_of([d0, d1, d2, d3, d4], v1, v2, v3, v4);
+    K::vertical_parts([d0, d1, d2, d3, d4], [v1, v2, v3, v4]);
 }
 
 /// [`vertical_parts`]' loop, every output row a parameter of its own (see

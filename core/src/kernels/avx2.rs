@@ -313,7 +313,7 @@ unsafe fn column_sum<T: Lanes, const K: usize>(
 /// products or zeros), unless those would lie past the rows' ends: then
 /// those lanes keep what they held.
 #[inline(always)]
-pub(crate) fn horizontal_sums(
+fn horizontal_sums(
     _: Avx2,
     ints: [&[i32]; INTS],
     floats: [&[f32]; FLOATS],
@@ -395,15 +395,15 @@ fn scalar_sums<T: Sample, const K: usize>(
 
 /// What one output row's tail reads: both sums rings, the slot of the
 /// first of the five rows centred on it, and `V` (window columns).
-pub(crate) struct BlockedRows<'a> {
+struct BlockedRows<'a> {
     /// The integer sums' ring.
-    pub ints: &'a [i32],
+    ints: &'a [i32],
     /// The `f32` sums' ring.
-    pub floats: &'a [f32],
-    /// The slot of the row two above the output row.
-    pub first_slot: usize,
+    floats: &'a [f32],
+    /// The slot of the row two above the output row (below `SUM_DEPTH`).
+    first_slot: usize,
     /// `V` (x, y) of the row.
-    pub v: [&'a [i32]; 2],
+    v: [&'a [i32]; 2],
 }
 
 /// The vertical `G` of the blocked sums centred on an output row, the solve
@@ -411,12 +411,7 @@ pub(crate) struct BlockedRows<'a> {
 /// columns of a window of `n` (the outputs' length; shorter rows write
 /// nothing).
 #[inline(always)]
-pub(crate) fn tail_row(
-    _: Avx2,
-    k: &TailConstants,
-    rows: &BlockedRows<'_>,
-    out: TailOut<'_>,
-) -> ExtremesSink {
+fn tail_row(_: Avx2, k: &TailConstants, rows: &BlockedRows<'_>, out: TailOut<'_>) -> ExtremesSink {
     let TailOut { m, fields } = out;
     match fields {
         None => by_slot::<false>(k, rows, m, [&mut [], &mut [], &mut [], &mut []]),
@@ -435,7 +430,7 @@ fn by_slot<const FIELDS: bool>(
 ) -> ExtremesSink {
     // SAFETY: the token (the caller's) proves AVX2 and FMA.
     unsafe {
-        match rows.first_slot % SUM_DEPTH {
+        match rows.first_slot {
             0 => tail_row_avx2::<FIELDS, 0>(k, rows, m, fields),
             1 => tail_row_avx2::<FIELDS, 1>(k, rows, m, fields),
             2 => tail_row_avx2::<FIELDS, 2>(k, rows, m, fields),

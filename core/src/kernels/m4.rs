@@ -26,7 +26,7 @@ use core::ops::Range;
 
 use super::{KernelSet, PlanarSums, wide_products};
 use crate::ByteScale;
-use crate::stages::{Binomial, ProductRows, ResidualInputs};
+use crate::stages::{Binomial, ProductRows, ResidualInputs, vertical_parts_of};
 use crate::tail::{TailConstants, TailOut, TailRows};
 
 /// The M4F's and M7's set: the loops below, the structure products of
@@ -53,9 +53,13 @@ impl KernelSet for M4 {
         }
     }
 
+    /// The assembly loop; the portable one where the rows' lengths differ
+    /// (never, as the engine cuts them).
     #[inline(always)]
-    fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) -> bool {
-        vertical_parts(d, v)
+    fn vertical_parts(d: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
+        if !vertical_parts(d, [&mut *v1, &mut *v2, &mut *v3, &mut *v4]) {
+            vertical_parts_of(d, v1, v2, v3, v4);
+        }
     }
 
     #[inline(always)]

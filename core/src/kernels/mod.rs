@@ -38,7 +38,7 @@ use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
     Binomial, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, binomial_of,
     horizontal_binomial, portable_products_row, running_binomial, sliding_binomial,
-    vertical_binomial,
+    vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink};
@@ -80,12 +80,10 @@ pub(crate) trait KernelSet: Copy {
         }
     }
 
-    /// `E`'s four vertical parts (`stages::vertical_parts_of`), or `false`
-    /// (the default) where the set has no loop of its own for them.
+    /// `E`'s four vertical parts (`stages::vertical_parts_of`).
     #[inline(always)]
-    fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) -> bool {
-        let _ = (d, v);
-        false
+    fn vertical_parts(d: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
+        vertical_parts_of(d, v1, v2, v3, v4);
     }
 
     /// The five structure products on columns `cols`, into product rows

@@ -24,7 +24,8 @@
 use crate::stages::{DN_SCALE, ResidualInputs, ScratchRows, cut, cut_rows};
 
 /// `X², XY, Y²` and `X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰` on columns `cols`, into
-/// product rows already cut to them (`stages::products_row`'s on the M4F);
+/// product rows already cut to them (the `M4` set's
+/// `KernelSet::products_row`, `kernels/m4.rs`);
 /// rows the memory
 /// cannot serve (never, once an engine has validated it) leave them
 /// untouched.
