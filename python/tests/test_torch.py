@@ -328,5 +328,9 @@ def test_shards_and_bad_options():
         ReynoldsFlowDataset(".", per="frame")
     with pytest.raises(ValueError, match="variant"):
         ReynoldsFlowDataset(".", variant="rgb")
+    # The Stream options the dataset sets itself are refused up front.
+    for key, value in (("layout", "hwc"), ("threads", 4), ("first_frame", "repeat")):
+        with pytest.raises(TypeError, match=f"takes no {key}"):
+            ReynoldsFlowDataset(".", **{key: value})
     with pytest.raises(OSError):
         ReynoldsFlowDataset("/nonexistent/videos")

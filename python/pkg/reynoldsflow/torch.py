@@ -185,7 +185,9 @@ class ReynoldsFlowDataset(IterableDataset):
 
     Keywords: ``step``, ``fps``, ``resize``, ``short_side``, ``max_frames``
     choose the frames (as the command line's flags); the others are
-    ``reynoldsflow.Stream``'s (``engine``, ``scale``, ``variant``, ...).
+    ``reynoldsflow.Stream``'s image options (``engine``, ``scale``,
+    ``variant``, ...), not its ``layout``, ``threads`` or ``first_frame``:
+    each worker computes on one thread, channels first, one image a pair.
     Frames of different sizes do not batch: pass ``resize`` or use
     ``batch_size=None``.
     """
@@ -206,6 +208,10 @@ class ReynoldsFlowDataset(IterableDataset):
             raise ValueError(f"per = {per!r}; expected 'pair' or 'clip'")
         if "layout" in options:
             raise TypeError("ReynoldsFlowDataset() yields channels first; it takes no layout")
+        for key in ("threads", "first_frame"):
+            if key in options:
+                raise TypeError(f"ReynoldsFlowDataset() takes no {key}: each worker computes one "
+                                "image a pair, on one thread")
         if (rank is None) != (world_size is None):
             raise ValueError("give rank and world_size together, or neither")
         self.src = os.fspath(src)
@@ -222,7 +228,7 @@ class ReynoldsFlowDataset(IterableDataset):
         self.image_options = options
         # Checked now, in the main process, not first in a worker: a bad
         # option or a missing src raises here.
-        _rf.Stream(2, 2, **self.image_options)
+        _rf.Stream(2, 2, threads=1, **self.image_options)
         self._items_of((0, 1))
 
     def _items_of(self, shard: Tuple[int, int]) -> Sequence[Tuple[str, str]]:
