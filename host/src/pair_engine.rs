@@ -23,7 +23,7 @@ use crate::fixed_engine::{self, FrameEngine, HostEngine, prepare};
 use crate::outputs::{OutputSpec, PairFields};
 use crate::page_buffer::ByteBuffer;
 use crate::pipeline::Compute;
-use crate::settings::Settings;
+use crate::settings::{Setting, Settings};
 use crate::{Gray, HostError};
 
 /// The engine of a stream of pairs: settings checked once, and each
@@ -77,7 +77,10 @@ impl PairEngine {
                     .thread_name(|i| format!("reynoldsflow-pair-{i}"))
                     .build()
                     .map_err(|e| {
-                        HostError::invalid("threads", format!("cannot start {n} threads: {e}"))
+                        HostError::setting(
+                            Setting::Threads,
+                            format!("cannot start {n} threads: {e}"),
+                        )
                     })?,
             ),
         };

@@ -158,6 +158,11 @@ impl<L> PairStream<L> {
         self.first_frame = first_frame;
     }
 
+    /// What the first frame of a stream gives.
+    pub fn first_frame(&self) -> FirstFrame {
+        self.first_frame
+    }
+
     /// A frame to fill for the next [`Self::push`]: the one the last pair
     /// no longer needs (its memory reused), or an empty one.
     pub fn take_spare(&mut self) -> Gray {

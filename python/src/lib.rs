@@ -1,9 +1,9 @@
 //! `import reynoldsflow`: the host crate's computation behind a NumPy API.
 //!
-//! Thin by design: every result comes from `reynoldsflow_host::pipeline::
-//! Compute::pair` (what `reynoldsflow pair`, `run` and `dataset` compute) or
-//! from `dataset::convert` (what `dataset` does per item), so the bytes are
-//! the command line's. This crate only turns arrays into frames and back,
+//! Thin by design: every result comes from the host's `PairEngine` (what
+//! `reynoldsflow pair`, `run` and `dataset` compute), paired by its
+//! `PairStream` for `Stream`, or from `dataset::convert` (what `dataset`
+//! does per item), so the bytes are the command line's. This crate only turns arrays into frames and back,
 //! checks arguments (`TypeError` for a wrong type, dtype or number of
 //! dimensions, `ValueError` for a wrong shape or value), releases the GIL
 //! while computing, and turns any panic into a `RuntimeError`.
@@ -33,9 +33,9 @@ use errors::{Failure, guarded, host_error, value_error};
 use frames::{Frames, Output, gray};
 use settings::{CallSettings, Kwargs, Layout};
 
-/// One thread's pair engine (the host's, on one thread: its memory kept
-/// from pair to pair), and the interleaved image a channels-first result
-/// is split from.
+/// A pair engine (the host's, on one thread or, for a `Stream`, on its
+/// `threads`: its memory kept from pair to pair), and the interleaved image
+/// a channels-first result is split from.
 struct PairWorker {
     engine: PairEngine,
     rgb: Vec<u8>,
@@ -87,6 +87,13 @@ impl PairWorker {
             }
         }
         Ok(0.0)
+    }
+
+    /// The image of one pair in `layout`, in a new buffer.
+    fn image_vec(&mut self, pair: (&Gray, &Gray), layout: Layout) -> Result<Vec<u8>, HostError> {
+        let mut image = vec![0; 3 * pair.0.pixels.len()];
+        self.pair_into(pair, layout, false, &mut image)?;
+        Ok(image)
     }
 }
 
@@ -150,9 +157,7 @@ fn represent<'py>(
     let (h, w) = p.frame_shape();
     let layout = settings.layout();
     let image = on_pair(py, &settings, (&p, &n), |worker, prev, next| {
-        let mut image = vec![0; 3 * h * w];
-        worker.pair_into((prev, next), layout, false, &mut image)?;
-        Ok(image)
+        worker.image_vec((prev, next), layout)
     })?;
     array(py, image, &layout.shape(None, h, w))
 }
@@ -384,7 +389,6 @@ struct Stream {
     width: usize,
     height: usize,
     layout: Layout,
-    first_frame: FirstFrame,
     /// The pairing, then the engine.
     pairs: PairStream<()>,
     worker: PairWorker,
@@ -444,11 +448,7 @@ impl Stream {
         worker: &mut PairWorker,
         layout: Layout,
     ) -> impl FnMut(&Gray, &Gray) -> Result<Vec<u8>, HostError> {
-        move |prev, next| {
-            let mut image = vec![0; 3 * prev.pixels.len()];
-            worker.pair_into((prev, next), layout, false, &mut image)?;
-            Ok(image)
-        }
+        move |prev, next| worker.image_vec((prev, next), layout)
     }
 }
 
@@ -496,13 +496,12 @@ impl Stream {
             width,
             height,
             layout: settings.layout(),
-            first_frame,
             pairs: PairStream::new(first_frame),
             worker: PairWorker::new(&settings, threads).map_err(host_error)?,
         })
     }
 
-    /// push(frame, *, out=None) -> None | (height, width, 3) uint8
+    /// push(frame, *, out=None) -> None | uint8 image (the layout's shape)
     ///
     /// This frame's image: the representation of (previous frame, frame),
     /// or for a first frame (since the start, end() or reset()) None, or
@@ -518,7 +517,7 @@ impl Stream {
         frame: &Bound<'py, PyAny>,
         out: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Option<Bound<'py, PyAny>>> {
-        if self.first_frame == FirstFrame::Repeat {
+        if self.pairs.first_frame() == FirstFrame::Repeat {
             return Err(value_error(
                 "Stream.push: first_frame=\"repeat\" gives two images at the second frame (the first frame's copy and its own); use feed(frame) and end(), which return lists",
             ));
@@ -532,7 +531,8 @@ impl Stream {
             let step = pairs.push(stream_frame(gray), |prev, next| {
                 worker.pair_into((prev, next), layout, false, rgb)
             })?;
-            // drop: nothing or the pair's image; black: its zeros first.
+            // One output at most: none or the pair's image (drop), zeros
+            // for a first frame (black).
             Ok(match step.outputs.into_iter().next() {
                 None => false,
                 Some(pair_stream::Output::Black { .. }) => {
@@ -545,7 +545,7 @@ impl Stream {
         Ok(written.then_some(output.object))
     }
 
-    /// feed(frame) -> list of (height, width, 3) uint8
+    /// feed(frame) -> list of uint8 images (the layout's shape)
     ///
     /// Every image this frame gives, in order: none or one, and with
     /// first_frame="repeat" two at the second frame (the first frame's
@@ -564,7 +564,7 @@ impl Stream {
         self.arrays(py, outputs)
     }
 
-    /// end() -> list of (height, width, 3) uint8
+    /// end() -> list of uint8 images (the layout's shape)
     ///
     /// The stream ends here (the end of the input, a gap): the images its
     /// frames still owe (with first_frame="repeat", a lone first frame
@@ -598,7 +598,7 @@ impl Stream {
     /// What the first frame gives: "drop", "black" or "repeat".
     #[getter]
     fn first_frame(&self) -> &'static str {
-        self.first_frame.name()
+        self.pairs.first_frame().name()
     }
 }
 

@@ -199,7 +199,8 @@ class Stream:
         layout: Layout = "hwc",
     ) -> None: ...
     def push(self, frame: Frame, *, out: Optional[Out] = None) -> Optional[npt.NDArray[np.uint8]]:
-        """This frame's (height, width, 3) image: the representation of
+        """This frame's image ((height, width, 3), or (3, height, width) with
+        layout="chw"): the representation of
         (previous frame, frame), or for a first frame (since the start,
         end() or reset()) None, or with first_frame="black" zeros. With out
         (as represent_clip's), the image is written into it and out
