@@ -739,3 +739,309 @@ fn error_text(bus: &gst::Bus) -> String {
     };
     format!("{} {:?}", e.error(), e.debug())
 }
+
+/// A harness whose source says it is live (`live`) or not: from a source
+/// that is not live, on more than one thread, the element computes whole
+/// pairs on its workers and pushes from their threads.
+fn harness_from(properties: &[(&str, &str)], live: bool) -> Harness {
+    let rig = harness(properties);
+    let sink = rig.element().unwrap().static_pad("sink").unwrap();
+    sink.add_probe(gst::PadProbeType::QUERY_UPSTREAM, move |_, info| {
+        if let Some(query) = info.query_mut()
+            && let gst::QueryViewMut::Latency(latency) = query.view_mut()
+        {
+            latency.set(live, gst::ClockTime::ZERO, gst::ClockTime::NONE);
+            return gst::PadProbeReturn::Handled;
+        }
+        gst::PadProbeReturn::Ok
+    });
+    rig
+}
+
+/// One step of a stream as a source gives it.
+#[derive(Clone, Copy)]
+enum Step {
+    /// New caps of this size.
+    Caps(usize, usize),
+    /// Frame `k` of the clip (at the last caps' size), stamped `k`.
+    Frame(usize),
+    /// A GAP event at frame `k`.
+    GapEvent(usize),
+    /// An empty buffer flagged GAP at frame `k`.
+    GapBuffer(usize),
+    /// A drain query (every output out), then a flush.
+    Flush,
+    /// A property set between frames.
+    Set(&'static str, &'static str),
+    /// The element to NULL and back to PLAYING (a stop, new caps after).
+    Restart(usize, usize),
+}
+
+/// An output buffer: its stamp, `DISCONT`, its bytes with any row
+/// padding, its cue boxes.
+type Output = (
+    Option<gst::ClockTime>,
+    bool,
+    Vec<u8>,
+    Vec<(u32, u32, u32, u32)>,
+);
+
+/// Everything that leaves the element: buffers in order, and the gaps'
+/// stamps.
+#[derive(Debug, Default, PartialEq)]
+struct Seen {
+    buffers: Vec<Output>,
+    gaps: Vec<gst::ClockTime>,
+}
+
+impl Seen {
+    fn collect(&mut self, rig: &mut Harness) {
+        while let Some(event) = rig.try_pull_event() {
+            if let gst::EventView::Gap(gap) = event.view() {
+                self.gaps.push(gap.get().0);
+            }
+        }
+        while let Some(b) = rig.try_pull() {
+            let boxes = b
+                .iter_meta::<VideoRegionOfInterestMeta>()
+                .map(|m| m.rect())
+                .collect();
+            let discont = b.flags().contains(gst::BufferFlags::DISCONT);
+            let bytes = b.map_readable().unwrap().to_vec();
+            self.buffers.push((b.pts(), discont, bytes, boxes));
+        }
+    }
+}
+
+/// Every output pushed before a drain query returns.
+fn drain(rig: &mut Harness) {
+    let mut drain = gst::query::Drain::new();
+    rig.srcpad().unwrap().peer_query(&mut drain);
+}
+
+/// Run `steps` through a fresh element with `properties` from a live
+/// source or not, then EOS: what leaves it, and how many buffers left
+/// from a worker thread.
+fn stream_through(
+    properties: &[(&str, &str)],
+    live: bool,
+    clip: &[Vec<u8>],
+    steps: &[Step],
+) -> (Seen, usize) {
+    let mut rig = harness_from(properties, live);
+    let element = rig.element().unwrap();
+    let from_workers = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let counter = std::sync::Arc::clone(&from_workers);
+    element
+        .static_pad("src")
+        .unwrap()
+        .add_probe(gst::PadProbeType::BUFFER, move |_, _| {
+            let name = std::thread::current().name().unwrap_or("").to_owned();
+            if name.starts_with("reynoldsflow-worker") {
+                counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            }
+            gst::PadProbeReturn::Ok
+        });
+    let mut seen = Seen::default();
+    let mut size = (0, 0);
+    for &step in steps {
+        match step {
+            Step::Caps(w, h) => {
+                size = (w, h);
+                rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+            }
+            Step::Frame(k) => {
+                let (w, h) = size;
+                let luma = &clip[k][..w * h];
+                assert_eq!(
+                    rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)),
+                    Ok(gst::FlowSuccess::Ok)
+                );
+            }
+            Step::GapEvent(k) => {
+                assert!(rig.push_event(gst::event::Gap::builder(pts(k)).duration(pts(1)).build()))
+            }
+            Step::GapBuffer(k) => {
+                let mut gap = gst::Buffer::new();
+                let b = gap.get_mut().unwrap();
+                b.set_pts(pts(k));
+                b.set_duration(pts(1));
+                b.set_flags(gst::BufferFlags::GAP);
+                assert_eq!(rig.push(gap), Ok(gst::FlowSuccess::Ok));
+            }
+            Step::Flush => {
+                drain(&mut rig);
+                seen.collect(&mut rig);
+                assert!(rig.push_event(gst::event::FlushStart::new()));
+                assert!(rig.push_event(gst::event::FlushStop::new(true)));
+                let segment = gst::FormattedSegment::<gst::ClockTime>::new();
+                assert!(rig.push_event(gst::event::Segment::new(&segment)));
+            }
+            Step::Set(name, value) => element.set_property_from_str(name, value),
+            Step::Restart(w, h) => {
+                drain(&mut rig);
+                seen.collect(&mut rig);
+                element.set_state(gst::State::Null).unwrap();
+                rig.play();
+                size = (w, h);
+                rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+            }
+        }
+    }
+    assert!(rig.push_event(gst::event::Eos::new()));
+    seen.collect(&mut rig);
+    let from_workers = from_workers.load(std::sync::atomic::Ordering::SeqCst);
+    (seen, from_workers)
+}
+
+/// From a source that is not live, whole pairs on the workers: the same
+/// outputs (stamps, flags, bytes, cues, gaps) as pair by pair from a live
+/// source, through caps changes, gaps, flushes, stops and property
+/// changes (the threads too), in every first-frame mode, and `run`'s
+/// bytes.
+#[test]
+fn whole_pairs_on_the_workers_give_what_each_pair_as_it_comes_gives() {
+    let (w, h) = (64, 48);
+    let clip = frames(12, w, h);
+    let frames_of = |range: std::ops::Range<usize>| range.map(Step::Frame);
+    let mut steps = vec![Step::Caps(w, h)];
+    steps.extend(frames_of(0..4));
+    steps.push(Step::GapEvent(4));
+    steps.extend(frames_of(5..7));
+    steps.push(Step::GapBuffer(7));
+    steps.extend(frames_of(8..9));
+    steps.push(Step::Caps(40, 32));
+    steps.extend(frames_of(9..11));
+    steps.push(Step::Flush);
+    steps.extend(frames_of(11..12));
+    steps.push(Step::Set("variant", "cd"));
+    steps.push(Step::Restart(w, h));
+    steps.extend(frames_of(0..3));
+    steps.push(Step::Set("scale", "fixed"));
+    steps.extend(frames_of(3..6));
+    // From the workers to each pair as it comes and back, mid-chain.
+    steps.push(Step::Set("threads", "1"));
+    steps.extend(frames_of(6..8));
+    steps.push(Step::Set("threads", "3"));
+    steps.extend(frames_of(8..10));
+
+    for first_frame in ["drop", "repeat", "black"] {
+        for threads in ["2", "3"] {
+            let properties = [
+                ("first-frame", first_frame),
+                ("threads", threads),
+                ("cues", "true"),
+                ("cue-threshold", "0.5"),
+            ];
+            let (live, none) = stream_through(&properties, true, &clip, &steps);
+            let (workers, pushed) = stream_through(&properties, false, &clip, &steps);
+            let case = format!("first-frame={first_frame} threads={threads}");
+            assert_eq!(none, 0, "{case}: pair by pair from a live source");
+            assert!(pushed > 0, "{case}: no output left from a worker");
+            assert!(live.buffers.len() >= 10, "{case}: {:?}", live.buffers.len());
+            assert_eq!(live.gaps, [pts(4), pts(7)], "{case}");
+            assert!(
+                live.buffers.iter().any(|b| !b.3.is_empty()),
+                "{case}: no cue seen"
+            );
+            assert!(live == workers, "{case}: the workers' outputs differ");
+        }
+    }
+
+    // And `run`'s bytes, a longer clip.
+    let clip = frames(20, w, h);
+    let mut steps = vec![Step::Caps(w, h)];
+    steps.extend(frames_of(0..20));
+    let (seen, _) = stream_through(&[("threads", "2")], false, &clip, &steps);
+    let expected = expected_outputs(&clip, (w, h), &Settings::default());
+    assert!(seen.buffers.iter().map(|b| &b.2).eq(expected.iter()));
+}
+
+/// A flush while the workers compute: the outputs of frames before it are
+/// pushed or dropped, never after it; the stream goes on from a first
+/// frame. A stop while they compute comes back, and the element runs
+/// again.
+#[test]
+fn a_flush_or_a_stop_while_the_workers_compute() {
+    let (w, h) = (160, 120);
+    let clip = frames(16, w, h);
+    let expected = |frames: &[Vec<u8>]| expected_outputs(frames, (w, h), &Settings::default());
+    let mut rig = harness_from(&[("threads", "2")], false);
+    rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+    for (k, luma) in clip[..8].iter().enumerate() {
+        rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)).unwrap();
+    }
+    assert!(rig.push_event(gst::event::FlushStart::new()));
+    assert!(rig.push_event(gst::event::FlushStop::new(true)));
+    let before: Vec<_> = std::iter::from_fn(|| rig.try_pull()).collect();
+    assert!(before.len() <= 7);
+    let segment = gst::FormattedSegment::<gst::ClockTime>::new();
+    assert!(rig.push_event(gst::event::Segment::new(&segment)));
+    for (k, luma) in clip[8..].iter().enumerate() {
+        rig.push(buffer(VideoFormat::Gray8, w, h, luma, 8 + k))
+            .unwrap();
+    }
+    assert!(rig.push_event(gst::event::Eos::new()));
+    let after: Vec<_> = std::iter::from_fn(|| rig.try_pull()).collect();
+    let stamps: Vec<_> = after.iter().map(|b| b.pts()).collect();
+    assert_eq!(stamps, (8..15).map(|k| Some(pts(k))).collect::<Vec<_>>());
+    assert!(after[0].flags().contains(gst::BufferFlags::DISCONT));
+    assert!(
+        after
+            .iter()
+            .map(|b| packed_rgb(b, w, h))
+            .eq(expected(&clip[8..]))
+    );
+
+    // A stop with pairs in flight, then the same element again.
+    let mut rig = harness_from(&[("threads", "2")], false);
+    rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+    let element = rig.element().unwrap();
+    for (k, luma) in clip[..8].iter().enumerate() {
+        rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)).unwrap();
+    }
+    element.set_state(gst::State::Null).unwrap();
+    rig.play();
+    rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+    let _ = std::iter::from_fn(|| rig.try_pull()).count();
+    for (k, luma) in clip[..5].iter().enumerate() {
+        rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)).unwrap();
+    }
+    assert!(rig.push_event(gst::event::Eos::new()));
+    let again: Vec<_> = std::iter::from_fn(|| rig.try_pull()).collect();
+    assert!(
+        again
+            .iter()
+            .map(|b| packed_rgb(b, w, h))
+            .eq(expected(&clip[..5]))
+    );
+}
+
+/// A pair that fails on a worker (cues past their frame size) stops the
+/// stream with the element's message, as it does pair by pair.
+#[test]
+fn a_pair_that_fails_on_a_worker_stops_the_stream_with_its_message() {
+    let (w, h) = (cues::MAX_SIDE + 8, 16);
+    let clip = frames(3, w, h);
+    for live in [true, false] {
+        let mut rig = harness_from(&[("threads", "2"), ("cues", "true")], live);
+        let bus = gst::Bus::new();
+        rig.element().unwrap().set_bus(Some(&bus));
+        rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+        let pushed: Vec<_> = clip
+            .iter()
+            .enumerate()
+            .map(|(k, luma)| rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)))
+            .collect();
+        drain(&mut rig);
+        let text = error_text(&bus);
+        assert!(text.contains("cues"), "live={live}: {text}");
+        assert!(rig.try_pull().is_none(), "live={live}");
+        assert!(
+            pushed.contains(&Err(gst::FlowError::Error))
+                || rig.push(buffer(VideoFormat::Gray8, w, h, &clip[0], 3))
+                    == Err(gst::FlowError::Error),
+            "live={live}: {pushed:?}"
+        );
+    }
+}

@@ -21,14 +21,35 @@
 //! or an end, which would be no motion of the scene.
 
 use std::fmt;
+use std::sync::Arc;
 
 use crate::Gray;
 pub use crate::settings::FirstFrame;
 
+/// A frame's luma as a stream holds it: a [`Gray`], or an `Arc<Gray>` for
+/// a front end that hands pairs to threads which compute them while the
+/// stream goes on (the GStreamer element).
+pub trait Luma {
+    /// `(width, height)`.
+    fn size(&self) -> (usize, usize);
+}
+
+impl Luma for Gray {
+    fn size(&self) -> (usize, usize) {
+        Gray::size(self)
+    }
+}
+
+impl Luma for Arc<Gray> {
+    fn size(&self) -> (usize, usize) {
+        Gray::size(self)
+    }
+}
+
 /// A frame as the stream sees it.
-pub struct Frame<L> {
+pub struct Frame<L, G = Gray> {
     /// Its luma.
-    pub gray: Gray,
+    pub gray: G,
     /// The encoding it came in (a name, for messages): a new one restarts.
     pub encoding: &'static str,
     /// When it was taken, in nanoseconds, where known: an earlier stamp
@@ -127,8 +148,8 @@ pub struct Step<R, L> {
 }
 
 /// The frame a pair starts with.
-struct Prev<L> {
-    gray: Gray,
+struct Prev<L, G> {
+    gray: G,
     encoding: &'static str,
     stamp: Option<i128>,
     /// Its label until an output took it.
@@ -136,14 +157,14 @@ struct Prev<L> {
 }
 
 /// The pairing state of one stream.
-pub struct PairStream<L> {
+pub struct PairStream<L, G = Gray> {
     first_frame: FirstFrame,
-    prev: Option<Prev<L>>,
+    prev: Option<Prev<L, G>>,
     /// The frame a pair no longer needs, for the front end to fill again.
-    spare: Option<Gray>,
+    spare: Option<G>,
 }
 
-impl<L> PairStream<L> {
+impl<L, G: Luma> PairStream<L, G> {
     /// A stream that has seen no frame.
     pub fn new(first_frame: FirstFrame) -> Self {
         Self {
@@ -163,14 +184,10 @@ impl<L> PairStream<L> {
         self.first_frame
     }
 
-    /// A frame to fill for the next [`Self::push`]: the one the last pair
-    /// no longer needs (its memory reused), or an empty one.
-    pub fn take_spare(&mut self) -> Gray {
-        self.spare.take().unwrap_or(Gray {
-            width: 0,
-            height: 0,
-            pixels: Vec::new(),
-        })
+    /// A frame to fill for the next [`Self::push`] (its memory reused):
+    /// the one the last pair no longer needs, if any.
+    pub fn take_spare(&mut self) -> Option<G> {
+        self.spare.take()
     }
 
     /// Take `frame`: pair it with the previous one through `compute(prev,
@@ -179,8 +196,8 @@ impl<L> PairStream<L> {
     /// first frame) and is returned.
     pub fn push<R, E>(
         &mut self,
-        frame: Frame<L>,
-        mut compute: impl FnMut(&Gray, &Gray) -> Result<R, E>,
+        frame: Frame<L, G>,
+        mut compute: impl FnMut(&G, &G) -> Result<R, E>,
     ) -> Result<Step<R, L>, E> {
         let restart = self.prev.as_ref().and_then(|p| restart(p, &frame));
         let mut outputs = Vec::new();
@@ -190,9 +207,10 @@ impl<L> PairStream<L> {
         let Some(mut prev) = self.prev.take() else {
             let label = match self.first_frame {
                 FirstFrame::Black => {
+                    let (width, height) = frame.gray.size();
                     outputs.push(Output::Black {
-                        width: frame.gray.width,
-                        height: frame.gray.height,
+                        width,
+                        height,
                         label: frame.label,
                     });
                     None
@@ -239,7 +257,7 @@ impl<L> PairStream<L> {
     /// frame is a first frame.
     pub fn end<R, E>(
         &mut self,
-        mut compute: impl FnMut(&Gray, &Gray) -> Result<R, E>,
+        mut compute: impl FnMut(&G, &G) -> Result<R, E>,
     ) -> Result<Option<Output<R, L>>, E> {
         let Some(mut prev) = self.prev.take() else {
             return Ok(None);
@@ -265,7 +283,7 @@ impl<L> PairStream<L> {
 }
 
 /// Why `next` cannot pair with `prev`, if it cannot.
-fn restart<L>(prev: &Prev<L>, next: &Frame<L>) -> Option<Restart> {
+fn restart<L, G: Luma>(prev: &Prev<L, G>, next: &Frame<L, G>) -> Option<Restart> {
     if prev.gray.size() != next.gray.size() {
         return Some(Restart::Size {
             from: prev.gray.size(),
@@ -409,8 +427,8 @@ mod tests {
         stream.reset();
         assert!(stream.end(pair).unwrap().is_none());
         // Its memory comes back to be filled again.
-        assert_eq!(stream.take_spare().pixels, [3; 4]);
-        assert!(stream.take_spare().pixels.is_empty());
+        assert_eq!(stream.take_spare().unwrap().pixels, [3; 4]);
+        assert!(stream.take_spare().is_none());
     }
 
     #[test]

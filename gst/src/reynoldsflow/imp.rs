@@ -1,18 +1,24 @@
 //! The element: a `BaseTransform` that keeps the previous frame's luma and,
 //! for every frame after the first, computes the pair through the host's
-//! [`PairEngine`] (`run`'s path, the frame's tiles spread over `threads`
-//! cores so no latency is added), in the order the host's [`PairStream`]
-//! says (first-frame policy, restarts).
+//! pair engine (`run`'s path), in the order the host's [`PairStream`] says
+//! (first-frame policy, restarts).
 //!
-//! Outputs are made in `generate_output`, so one input can give two
-//! outputs (`first-frame=repeat`) or none (`drop`). The pair chain breaks
+//! On one thread, and from a live source, each pair is computed as its
+//! frame arrives, its tiles spread over `threads` cores (one pair's
+//! latency), and its outputs are made in `generate_output`, so one input
+//! can give two outputs (`first-frame=repeat`) or none (`drop`). From a
+//! source that is not live (a file) on more threads, whose frames come
+//! faster than one pair takes, each thread computes whole pairs while the
+//! streaming thread goes on ([`super::workers`]), and the outputs leave in
+//! order from the [`Outbox`]; serialized events and queries wait for the
+//! outputs before them. The bytes are the same either way. The pair chain breaks
 //! (the next frame is a first frame again) on a flush, a stop, new caps, a
 //! gap (a GAP event or a buffer flagged GAP) and a timestamp going back; at
 //! new caps, a gap and EOS the last frame gets the output it still owes
 //! (`repeat`), so every frame gets one.
 
 use std::collections::VecDeque;
-use std::sync::{LazyLock, Mutex, MutexGuard};
+use std::sync::{Arc, LazyLock, Mutex, MutexGuard, OnceLock};
 
 use gst::glib;
 use gst::prelude::*;
@@ -22,14 +28,14 @@ use gst_base::subclass::prelude::*;
 use gst_video::VideoFormat;
 use gst_video::prelude::*;
 use reynoldsflow_core::{Config, MAX_SIDE, Params};
-use reynoldsflow_cues::Region;
-use reynoldsflow_host::cues::{self as host_cues, Cues};
-use reynoldsflow_host::pair_engine::PairEngine;
 use reynoldsflow_host::pair_stream::{Frame, Output, PairStream};
 use reynoldsflow_host::settings::{self as values, FirstFrame, Setting, Settings};
 use reynoldsflow_host::{Gray, HostError};
 
-use super::{FirstFrameMode, ScaleMode, VariantMode, message};
+use super::outbox::{Item, Outbox, Slot};
+use super::pairs::{Failure, PairOutput, Pairs};
+use super::workers::{Recipe, Workers};
+use super::{FirstFrameMode, ScaleMode, VariantMode};
 use crate::cues;
 
 static CAT: LazyLock<gst::DebugCategory> = LazyLock::new(|| {
@@ -104,7 +110,7 @@ impl Properties {
 
 /// A buffer's timing, given to the output that carries its label.
 #[derive(Clone, Copy, Debug)]
-struct Stamps {
+pub(super) struct Stamps {
     pts: Option<gst::ClockTime>,
     dts: Option<gst::ClockTime>,
     duration: Option<gst::ClockTime>,
@@ -132,34 +138,36 @@ impl Stamps {
     }
 }
 
-/// What goes downstream next, in order.
-enum Pending {
-    Buffer(gst::Buffer),
-    /// A gap in the input, passed on.
-    Gap(gst::Event),
+/// How the pairs are computed.
+enum Compute {
+    /// As each frame arrives, on the streaming thread and the engine's
+    /// helpers.
+    Here(Pairs),
+    /// Whole pairs on the workers, each with the recipe of its engine.
+    Workers(Workers, Recipe),
+}
+
+/// A pair's result as the stream hands it on.
+enum Computed {
+    /// Computed here.
+    Done(PairOutput),
+    /// On a worker.
+    Queued(Slot),
 }
 
 /// The streaming state, reset on flush, caps change and stop.
 struct State {
     in_info: Option<gst_video::VideoInfo>,
     out_info: Option<gst_video::VideoInfo>,
-    stream: PairStream<Stamps>,
-    /// Outputs made from the last input, not yet handed downstream.
+    stream: PairStream<Stamps, Arc<Gray>>,
+    /// Outputs made from the last input, not yet handed downstream (when
+    /// computed here).
     pending: VecDeque<Pending>,
-    pairs: Pairs,
+    compute: Option<Compute>,
+    /// Whether the source is live (asked once per stream).
+    live: Option<bool>,
     /// The next output follows a reset.
     discont: bool,
-}
-
-/// What computes the pairs.
-#[derive(Default)]
-struct Pairs {
-    /// The engine and the properties generation it was built for.
-    engine: Option<(u64, PairEngine)>,
-    /// The cues and the generation they were built for.
-    cues: Option<(u64, Cues)>,
-    /// An image's rows where the output's have padding.
-    scratch: Vec<u8>,
 }
 
 impl Default for State {
@@ -169,7 +177,8 @@ impl Default for State {
             out_info: None,
             stream: PairStream::new(values::DEFAULT_FIRST_FRAME),
             pending: VecDeque::new(),
-            pairs: Pairs::default(),
+            compute: None,
+            live: None,
             discont: true,
         }
     }
@@ -180,7 +189,7 @@ impl State {
     fn reset(&mut self) {
         self.stream.reset();
         self.pending.clear();
-        self.pairs.cues = None;
+        self.live = None;
         self.discont = true;
     }
 }
@@ -190,6 +199,9 @@ impl State {
 pub struct ReynoldsFlow {
     settings: Mutex<Properties>,
     state: Mutex<State>,
+    /// The outputs of pairs computed on the workers (made when the element
+    /// is constructed).
+    outbox: OnceLock<Arc<Outbox>>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -260,7 +272,7 @@ impl ObjectImpl for ReynoldsFlow {
                     .build(),
                 glib::ParamSpecUInt::builder("threads")
                     .nick("Threads")
-                    .blurb("Threads that compute each frame pair (0: every core); the output does not depend on it")
+                    .blurb("Threads (0: every core): from a live source they share each pair as it arrives, otherwise each computes whole pairs; the output does not depend on it")
                     .maximum(1024)
                     .default_value(DEFAULT_THREADS)
                     .mutable_playing()
@@ -343,6 +355,7 @@ impl ObjectImpl for ReynoldsFlow {
 
     fn constructed(&self) {
         self.parent_constructed();
+        let _ = self.outbox.set(Arc::new(Outbox::new(&self.obj())));
         // Refused caps never reach set_caps (the pad checks them first):
         // say why here, on the caps event itself, rather than leave the
         // source with a bare "not-negotiated".
@@ -420,6 +433,8 @@ impl BaseTransformImpl for ReynoldsFlow {
     const TRANSFORM_IP_ON_PASSTHROUGH: bool = false;
 
     fn stop(&self) -> Result<(), gst::ErrorMessage> {
+        // The pads are flushing already: a push in hand returns at once.
+        self.outbox().flush_stop();
         *lock(&self.state) = State::default();
         Ok(())
     }
@@ -488,7 +503,11 @@ impl BaseTransformImpl for ReynoldsFlow {
 
     fn sink_event(&self, event: gst::Event) -> bool {
         match event.view() {
-            gst::EventView::FlushStop(_) => lock(&self.state).reset(),
+            gst::EventView::FlushStart(_) => self.outbox().flush_start(),
+            gst::EventView::FlushStop(_) => {
+                self.outbox().flush_stop();
+                lock(&self.state).reset();
+            }
             // The stream ends before new caps (the frame that owes an
             // output is made in the old ones), at EOS and at a gap (no pair
             // spans it; the gap goes on downstream).
@@ -496,18 +515,13 @@ impl BaseTransformImpl for ReynoldsFlow {
                 if self.end_stream().is_err() {
                     return false;
                 }
-                while let Some(next) = self.next_pending() {
-                    let pushed = match next {
-                        Pending::Buffer(buffer) => self.obj().src_pad().push(buffer).map(|_| ()),
-                        Pending::Gap(gap) => {
-                            self.obj().src_pad().push_event(gap);
-                            Ok(())
-                        }
-                    };
-                    if pushed.is_err() {
-                        break;
-                    }
+                if self.flush_outputs().is_err() {
+                    return false;
                 }
+            }
+            // Every other serialized event goes on after the outputs before it.
+            _ if event.is_serialized() => {
+                let _ = self.outbox().drain();
             }
             _ => {}
         }
@@ -515,6 +529,11 @@ impl BaseTransformImpl for ReynoldsFlow {
     }
 
     fn query(&self, direction: gst::PadDirection, query: &mut gst::QueryRef) -> bool {
+        // A serialized query (allocation, drain) comes after the outputs
+        // before it.
+        if direction == gst::PadDirection::Sink && query.is_serialized() {
+            let _ = self.outbox().drain();
+        }
         if !BaseTransformImplExt::parent_query(self, direction, query) {
             return false;
         }
@@ -532,9 +551,18 @@ impl BaseTransformImpl for ReynoldsFlow {
     }
 
     fn generate_output(&self) -> Result<GenerateOutputSuccess, gst::FlowError> {
-        if let Some(input) = self.take_queued_buffer() {
-            self.process(&input)?;
+        if let Some(input) = self.take_queued_buffer()
+            && let Some(threads) = self.process(&input)?
+        {
+            // On the workers: room for the next frame once a thread is
+            // free (the state is not held: a push may query the element).
+            let outbox = self.outbox();
+            outbox.push_ready();
+            outbox.wait_room(threads)?;
+            return Ok(GenerateOutputSuccess::NoOutput);
         }
+        // Outputs computed here go after those of the workers, if any.
+        self.outbox().drain()?;
         // Each buffer returned is pushed before the next call: a gap goes
         // out in its place among them.
         while let Some(next) = self.next_pending() {
@@ -559,27 +587,48 @@ fn frame_duration(info: &gst_video::VideoInfo) -> Option<gst::ClockTime> {
     (num > 0).then(|| gst::ClockTime::SECOND.mul_div_floor(den, num))?
 }
 
-/// One pair's image (not yet stamped) and cues.
-struct PairOutput {
-    image: gst::Buffer,
-    /// The cues' regions and level, when `cues=true`.
-    cues: Option<(Vec<Region>, f64)>,
+/// What goes downstream next from the streaming thread, in order.
+enum Pending {
+    Buffer(gst::Buffer),
+    /// A gap in the input, passed on.
+    Gap(gst::Event),
 }
 
 impl ReynoldsFlow {
+    fn outbox(&self) -> &Arc<Outbox> {
+        self.outbox
+            .get()
+            .expect("made when the element is constructed")
+    }
+
     fn next_pending(&self) -> Option<Pending> {
         lock(&self.state).pending.pop_front()
     }
 
     /// Post `e` as an element error (a setting named by its property).
-    fn fail(&self, kind: gst::LibraryError, e: &HostError) -> gst::FlowError {
-        gst::element_imp_error!(self, kind, ("{}", message(e)));
+    fn fail(&self, failure: &Failure) -> gst::FlowError {
+        failure.post(&self.obj());
         gst::FlowError::Error
     }
 
-    /// Take one input frame: queue the outputs it gives.
-    fn process(&self, input: &gst::Buffer) -> Result<(), gst::FlowError> {
+    /// Whether the source is live (its latency query says so): each pair
+    /// is then computed as its frame arrives. One that does not answer is
+    /// taken to be live.
+    fn upstream_live(&self) -> bool {
+        let mut query = gst::query::Latency::new();
+        !self.obj().sink_pad().peer_query(&mut query) || query.result().0
+    }
+
+    /// Take one input frame: queue the outputs it gives. Returns the
+    /// workers' threads when they compute its pairs.
+    fn process(&self, input: &gst::Buffer) -> Result<Option<usize>, gst::FlowError> {
         let properties = lock(&self.settings).clone();
+        let live = lock(&self.state).live;
+        let live = live.unwrap_or_else(|| {
+            let live = self.upstream_live();
+            lock(&self.state).live = Some(live);
+            live
+        });
         let mut state = lock(&self.state);
         let state = &mut *state;
         let Some(in_info) = state.in_info.clone() else {
@@ -590,6 +639,13 @@ impl ReynoldsFlow {
             );
             return Err(gst::FlowError::NotNegotiated);
         };
+        let out_info = state
+            .out_info
+            .clone()
+            .ok_or(gst::FlowError::NotNegotiated)?;
+        // Checked on every frame, the first included: a bad setting stops
+        // the stream at once, naming its property.
+        self.prepare(state, &properties, live, &out_info)?;
         let stamps = Stamps::of(input);
         if input.flags().contains(gst::BufferFlags::GAP) {
             // No frame here (its bytes, if any, show nothing): the stream
@@ -598,8 +654,8 @@ impl ReynoldsFlow {
             let gap = gst::event::Gap::builder(stamps.pts.unwrap_or(gst::ClockTime::ZERO))
                 .duration(stamps.duration)
                 .build();
-            state.pending.push_back(Pending::Gap(gap));
-            return Ok(());
+            self.queue_gap(state, gap);
+            return Ok(state.workers());
         }
         let (width, height) = (in_info.width() as usize, in_info.height() as usize);
         let frame = gst_video::VideoFrameRef::from_buffer_ref_readable(input.as_ref(), &in_info)
@@ -613,51 +669,101 @@ impl ReynoldsFlow {
             })?;
         let stride = frame.plane_stride()[0] as usize;
         let luma = frame.plane_data(0).map_err(|_| gst::FlowError::Error)?;
-        // Checked on every frame, the first included: a bad setting stops
-        // the stream at once, naming its property.
-        self.prepare(state, &properties)?;
-        let mut gray = state.stream.take_spare();
+        // The frame the last pair no longer needs, unless a worker still
+        // reads it.
+        let mut gray = state
+            .stream
+            .take_spare()
+            .and_then(|spare| Arc::try_unwrap(spare).ok())
+            .unwrap_or(Gray {
+                width: 0,
+                height: 0,
+                pixels: Vec::new(),
+            });
         gray.pixels.clear();
         for row in luma.chunks(stride.max(1)).take(height) {
             gray.pixels.extend_from_slice(&row[..width.min(row.len())]);
         }
         (gray.width, gray.height) = (width, height);
         let frame = Frame {
-            gray,
+            gray: Arc::new(gray),
             encoding: in_info.format().to_str().as_str(),
             stamp: stamps.pts.map(|t| i128::from(t.nseconds())),
             label: stamps,
         };
-        let (stream, pairs) = (&mut state.stream, &mut state.pairs);
-        let out_info = state
-            .out_info
-            .as_ref()
-            .ok_or(gst::FlowError::NotNegotiated)?;
-        let step = stream.push(frame, |prev, next| self.pair(pairs, out_info, prev, next))?;
+        let (stream, compute) = (&mut state.stream, &mut state.compute);
+        let step = stream.push(frame, |prev, next| {
+            self.pair(compute, &out_info, prev, next)
+        })?;
         if let Some(restart) = &step.restart {
             gst::info!(CAT, imp = self, "the pair chain restarts: {restart}");
         }
-        self.queue(state, step.outputs)
+        self.queue(state, step.outputs)?;
+        Ok(state.workers())
     }
 
-    /// Build the engine and the cues anew when a property changed.
-    fn prepare(&self, state: &mut State, properties: &Properties) -> Result<(), gst::FlowError> {
+    /// Build what computes the pairs anew when a property changed, on the
+    /// workers when the source is not live and more than one thread asked.
+    fn prepare(
+        &self,
+        state: &mut State,
+        properties: &Properties,
+        live: bool,
+        out_info: &gst_video::VideoInfo,
+    ) -> Result<(), gst::FlowError> {
         let generation = properties.generation;
         let settings = properties
             .settings()
-            .map_err(|e| self.fail(gst::LibraryError::Settings, &e))?;
-        let pairs = &mut state.pairs;
-        if pairs.engine.as_ref().is_none_or(|(g, _)| *g != generation) {
-            let engine = PairEngine::new(&settings)
-                .map_err(|e| self.fail(gst::LibraryError::Settings, &e))?
-                .keep_magnitudes(properties.cues);
-            pairs.engine = Some((generation, engine));
-        }
-        let built = pairs.cues.as_ref().is_some_and(|(g, _)| *g == generation);
-        if properties.cues && !built {
-            let cues =
-                Cues::new(&settings).map_err(|e| self.fail(gst::LibraryError::Settings, &e))?;
-            pairs.cues = Some((generation, cues));
+            .map_err(|e| self.fail(&Failure::Settings(super::message(&e))))?;
+        let threads = settings.threads();
+        let here = live || threads < 2;
+        let current = match &state.compute {
+            Some(Compute::Here(pairs)) => here && pairs.generation == generation,
+            Some(Compute::Workers(workers, recipe)) => {
+                !here
+                    && recipe.generation == generation
+                    && workers.threads() == threads
+                    && recipe.out_info == *out_info
+            }
+            None => false,
+        };
+        if !current {
+            let compute = match here {
+                true => Compute::Here(
+                    Pairs::new(&settings, properties.cues, generation)
+                        .map_err(|f| self.fail(&f))?,
+                ),
+                false => {
+                    let recipe = Recipe {
+                        settings: Settings {
+                            threads: Some(1),
+                            ..settings.clone()
+                        },
+                        cues: properties.cues,
+                        generation,
+                        out_info: out_info.clone(),
+                    };
+                    let workers = match state.compute.take() {
+                        Some(Compute::Workers(w, _)) if w.threads() == threads => w,
+                        _ => Workers::new(threads).map_err(|f| self.fail(&f))?,
+                    };
+                    workers.prepare(&recipe).map_err(|f| self.fail(&f))?;
+                    Compute::Workers(workers, recipe)
+                }
+            };
+            match &compute {
+                Compute::Here(_) => gst::info!(
+                    CAT,
+                    imp = self,
+                    "each pair computed as its frame arrives, on {threads} thread(s)"
+                ),
+                Compute::Workers(..) => gst::info!(
+                    CAT,
+                    imp = self,
+                    "whole pairs on {threads} threads (the source is not live)"
+                ),
+            }
+            state.compute = Some(compute);
         }
         state.stream.set_first_frame(settings.first_frame);
         Ok(())
@@ -670,83 +776,63 @@ impl ReynoldsFlow {
     }
 
     fn end_locked(&self, state: &mut State) -> Result<(), gst::FlowError> {
-        let (stream, pairs) = (&mut state.stream, &mut state.pairs);
+        let (stream, compute) = (&mut state.stream, &mut state.compute);
         let Some(out_info) = state.out_info.as_ref() else {
             stream.reset();
             return Ok(());
         };
-        let owed = stream.end(|prev, next| self.pair(pairs, out_info, prev, next))?;
+        let owed = stream.end(|prev, next| self.pair(compute, out_info, prev, next))?;
         self.queue(state, owed.into_iter().collect())
     }
 
-    /// The pair `(prev, next)` through the engine, into a new output
-    /// buffer, and its cues.
-    fn pair(
-        &self,
-        pairs: &mut Pairs,
-        out_info: &gst_video::VideoInfo,
-        prev: &Gray,
-        next: &Gray,
-    ) -> Result<PairOutput, gst::FlowError> {
-        let Pairs {
-            engine,
-            cues,
-            scratch,
-        } = pairs;
-        let Some((_, engine)) = engine.as_mut() else {
-            return Err(gst::FlowError::NotNegotiated);
-        };
-        let failed = |e: HostError| {
-            gst::element_imp_error!(self, gst::StreamError::Failed, ("{}", message(&e)));
-            gst::FlowError::Error
-        };
-        let (width, height) = prev.size();
-        let row = 3 * width;
-        let mut image =
-            gst::Buffer::with_size(out_info.size()).map_err(|_| gst::FlowError::Error)?;
-        {
-            let buffer = image.get_mut().expect("a new buffer is writable");
-            let mut frame = gst_video::VideoFrameRef::from_buffer_ref_writable(buffer, out_info)
-                .map_err(|_| gst::FlowError::Error)?;
-            let stride = frame.plane_stride()[0] as usize;
-            let plane = frame.plane_data_mut(0).map_err(|_| gst::FlowError::Error)?;
-            if stride == row {
-                // Straight into the output.
-                let plane = plane.get_mut(..row * height).ok_or(gst::FlowError::Error)?;
-                engine.image(prev, next, plane).map_err(failed)?;
-            } else {
-                scratch.resize(row * height, 0);
-                engine.image(prev, next, scratch).map_err(failed)?;
-                copy_rows(plane, stride, scratch, row);
+    /// The outputs the streaming thread holds, after the workers' ones:
+    /// pushed now (before an event).
+    fn flush_outputs(&self) -> Result<gst::FlowSuccess, gst::FlowError> {
+        let outbox = self.outbox();
+        outbox.push_ready();
+        outbox.drain()?;
+        while let Some(next) = self.next_pending() {
+            match next {
+                Pending::Buffer(buffer) => {
+                    self.obj().src_pad().push(buffer)?;
+                }
+                Pending::Gap(gap) => {
+                    self.obj().src_pad().push_event(gap);
+                }
             }
         }
-        let cues = match cues.as_mut() {
-            Some((_, cues)) => {
-                let magnitudes = engine.magnitudes().ok_or(gst::FlowError::Error)?;
-                let regions = cues.regions(&magnitudes).map_err(|e| {
-                    gst::element_imp_error!(
-                        self,
-                        gst::LibraryError::Settings,
-                        (
-                            "cues: {e} (they cover frames up to {} px a side)",
-                            host_cues::MAX_SIDE
-                        )
-                    );
-                    gst::FlowError::Error
-                })?;
-                let regions = regions.to_vec();
-                Some((regions, cues.level()))
-            }
-            None => None,
-        };
-        Ok(PairOutput { image, cues })
+        Ok(gst::FlowSuccess::Ok)
     }
 
-    /// Stamp `outputs` and queue them.
+    /// The pair `(prev, next)`: computed here, or handed to a worker.
+    fn pair(
+        &self,
+        compute: &mut Option<Compute>,
+        out_info: &gst_video::VideoInfo,
+        prev: &Arc<Gray>,
+        next: &Arc<Gray>,
+    ) -> Result<Computed, gst::FlowError> {
+        match compute {
+            Some(Compute::Here(pairs)) => pairs
+                .pair(out_info, prev, next)
+                .map(Computed::Done)
+                .map_err(|f| self.fail(&f)),
+            Some(Compute::Workers(workers, recipe)) => Ok(Computed::Queued(workers.submit(
+                recipe,
+                Arc::clone(prev),
+                Arc::clone(next),
+                self.outbox(),
+            ))),
+            None => Err(gst::FlowError::NotNegotiated),
+        }
+    }
+
+    /// Stamp `outputs` and queue them: for the streaming thread to push
+    /// when computed here, in the outbox when on the workers.
     fn queue(
         &self,
         state: &mut State,
-        outputs: Vec<Output<PairOutput, Stamps>>,
+        outputs: Vec<Output<Computed, Stamps>>,
     ) -> Result<(), gst::FlowError> {
         for output in outputs {
             match output {
@@ -764,57 +850,95 @@ impl ReynoldsFlow {
                         .map_writable()
                         .map_err(|_| gst::FlowError::Error)?
                         .fill(0);
-                    let out = self.stamped(state, image, &label, None);
-                    state.pending.push_back(Pending::Buffer(out));
-                }
-                Output::Result { result, labels } => {
-                    let last = labels.len().saturating_sub(1);
-                    for (i, label) in labels.iter().enumerate() {
-                        // A copy shares the image's memory.
-                        let image = match i == last {
-                            true => result.image.clone(),
-                            false => result.image.copy(),
-                        };
-                        let out = self.stamped(state, image, label, result.cues.as_ref());
-                        state.pending.push_back(Pending::Buffer(out));
+                    let output = PairOutput { image, cues: None };
+                    let mut discont = std::mem::take(&mut state.discont);
+                    for buffer in outputs_of(&self.obj(), output, &[label], &mut discont) {
+                        self.queue_buffer(state, buffer);
                     }
+                }
+                Output::Result {
+                    result: Computed::Done(output),
+                    labels,
+                } => {
+                    let mut discont = std::mem::take(&mut state.discont);
+                    for buffer in outputs_of(&self.obj(), output, &labels, &mut discont) {
+                        state.pending.push_back(Pending::Buffer(buffer));
+                    }
+                }
+                Output::Result {
+                    result: Computed::Queued(slot),
+                    labels,
+                } => {
+                    let discont = std::mem::take(&mut state.discont);
+                    self.outbox().add(Item::Pair {
+                        slot,
+                        labels,
+                        discont,
+                    });
                 }
             }
         }
         Ok(())
     }
 
-    /// `image` stamped, with its cues as metas (and their message posted).
-    fn stamped(
-        &self,
-        state: &mut State,
-        mut image: gst::Buffer,
-        stamps: &Stamps,
-        cues: Option<&(Vec<Region>, f64)>,
-    ) -> gst::Buffer {
-        let buffer = image.make_mut();
-        stamps.apply(buffer);
-        if std::mem::take(&mut state.discont) {
-            buffer.set_flags(gst::BufferFlags::DISCONT);
+    /// A stamped output made here, in its place.
+    fn queue_buffer(&self, state: &mut State, buffer: gst::Buffer) {
+        match state.workers() {
+            Some(_) => self.outbox().add(Item::Buffer(buffer)),
+            None => state.pending.push_back(Pending::Buffer(buffer)),
         }
-        if let Some((regions, level)) = cues {
-            cues::add_metas(buffer, regions);
-            let structure = cues::message_structure(stamps.pts, *level, regions);
-            let message = gst::message::Element::builder(structure)
-                .src(&*self.obj())
-                .build();
-            let _ = self.obj().post_message(message);
+    }
+
+    /// A gap, in its place.
+    fn queue_gap(&self, state: &mut State, gap: gst::Event) {
+        match state.workers() {
+            Some(_) => self.outbox().add(Item::Gap(gap)),
+            None => state.pending.push_back(Pending::Gap(gap)),
         }
-        image
     }
 }
 
-/// `rgb`'s rows of `row` bytes into `plane`, rows `stride` bytes apart,
-/// the padding after each row zero (no byte leaves unwritten).
-fn copy_rows(plane: &mut [u8], stride: usize, rgb: &[u8], row: usize) {
-    for (dst, src) in plane.chunks_mut(stride).zip(rgb.chunks(row)) {
-        let (pixels, padding) = dst.split_at_mut(row.min(dst.len()));
-        pixels.copy_from_slice(&src[..pixels.len()]);
-        padding.fill(0);
+impl State {
+    /// The workers' threads, when they compute the pairs.
+    fn workers(&self) -> Option<usize> {
+        match &self.compute {
+            Some(Compute::Workers(workers, _)) => Some(workers.threads()),
+            _ => None,
+        }
     }
+}
+
+/// A pair's output once per label, stamped (the copy for an earlier label
+/// shares the image's memory), `DISCONT` on the first when `discont` (then
+/// cleared), with its cues as metas (and their message posted).
+pub(super) fn outputs_of(
+    element: &super::ReynoldsFlow,
+    output: PairOutput,
+    labels: &[Stamps],
+    discont: &mut bool,
+) -> Vec<gst::Buffer> {
+    let last = labels.len().saturating_sub(1);
+    let mut buffers = Vec::with_capacity(labels.len());
+    let PairOutput { mut image, cues } = output;
+    for (i, stamps) in labels.iter().enumerate() {
+        let mut out = match i == last {
+            true => std::mem::replace(&mut image, gst::Buffer::new()),
+            false => image.copy(),
+        };
+        let buffer = out.make_mut();
+        stamps.apply(buffer);
+        if std::mem::take(discont) {
+            buffer.set_flags(gst::BufferFlags::DISCONT);
+        }
+        if let Some((regions, level)) = &cues {
+            cues::add_metas(buffer, regions);
+            let structure = cues::message_structure(stamps.pts, *level, regions);
+            let message = gst::message::Element::builder(structure)
+                .src(element)
+                .build();
+            let _ = element.post_message(message);
+        }
+        buffers.push(out);
+    }
+    buffers
 }

@@ -7,6 +7,9 @@ use reynoldsflow_host::outputs::Variant;
 use reynoldsflow_host::settings::{FirstFrame, ScaleArg, Setting};
 
 mod imp;
+mod outbox;
+mod pairs;
+mod workers;
 
 glib::wrapper! {
     /// The `reynoldsflow` element.
