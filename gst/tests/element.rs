@@ -1045,3 +1045,45 @@ fn a_pair_that_fails_on_a_worker_stops_the_stream_with_its_message() {
         );
     }
 }
+
+/// Downstream at its end (`identity eos-after`) or failing (`error-after`)
+/// while the workers compute, or pair by pair: the source learns it, and
+/// the pipeline still ends (EOS or an error on the bus, never a hang).
+#[test]
+fn the_pipeline_ends_when_downstream_ends_or_fails_early() {
+    init();
+    let (w, h) = (160, 120);
+    let clip = frames(12, w, h);
+    for live in [false, true] {
+        for downstream in ["eos-after=3", "error-after=3"] {
+            let pipeline = gst::parse::launch(&format!(
+                "appsrc name=src is-live={live} format=time ! reynoldsflow threads=2 \
+                 ! identity {downstream} ! fakesink sync=false"
+            ))
+            .unwrap()
+            .downcast::<gst::Pipeline>()
+            .unwrap();
+            let src = pipeline.by_name("src").unwrap();
+            src.set_property("caps", caps(VideoFormat::Gray8, w, h));
+            pipeline.set_state(gst::State::Playing).unwrap();
+            for (k, luma) in clip.iter().enumerate() {
+                let frame = buffer(VideoFormat::Gray8, w, h, luma, k);
+                let pushed = src.emit_by_name::<gst::FlowReturn>("push-buffer", &[&frame]);
+                if pushed != gst::FlowReturn::Ok {
+                    break;
+                }
+            }
+            src.emit_by_name::<gst::FlowReturn>("end-of-stream", &[]);
+            let bus = pipeline.bus().unwrap();
+            let end = bus.timed_pop_filtered(
+                gst::ClockTime::from_seconds(20),
+                &[gst::MessageType::Eos, gst::MessageType::Error],
+            );
+            pipeline.set_state(gst::State::Null).unwrap();
+            assert!(
+                end.is_some(),
+                "live={live} {downstream}: the pipeline hangs"
+            );
+        }
+    }
+}

@@ -515,9 +515,10 @@ impl BaseTransformImpl for ReynoldsFlow {
                 if self.end_stream().is_err() {
                     return false;
                 }
-                if self.flush_outputs().is_err() {
-                    return false;
-                }
+                // A push that failed (downstream at its end, or in error)
+                // went upstream already; the event goes on all the same,
+                // so an EOS still ends the pipeline.
+                let _ = self.flush_outputs();
             }
             // Every other serialized event goes on after the outputs before it.
             _ if event.is_serialized() => {
