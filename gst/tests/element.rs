@@ -1073,7 +1073,7 @@ fn the_pipeline_ends_when_downstream_ends_or_fails_early() {
                     break;
                 }
             }
-            src.emit_by_name::<gst::FlowReturn>("end-of-stream", &[]);
+            let _ = src.emit_by_name::<gst::FlowReturn>("end-of-stream", &[]);
             let bus = pipeline.bus().unwrap();
             let end = bus.timed_pop_filtered(
                 gst::ClockTime::from_seconds(20),
