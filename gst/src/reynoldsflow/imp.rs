@@ -606,7 +606,7 @@ impl ReynoldsFlow {
         lock(&self.state).pending.pop_front()
     }
 
-    /// Post `e` as an element error (a setting named by its property).
+    /// Post `failure` as an element error: the flow error to return.
     fn fail(&self, failure: &Failure) -> gst::FlowError {
         failure.post(&self.obj());
         gst::FlowError::Error
