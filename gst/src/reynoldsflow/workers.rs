@@ -22,8 +22,9 @@ use super::pairs::{Failure, Pairs};
 pub(super) struct Workers {
     pool: rayon::ThreadPool,
     threads: usize,
-    /// Engines not in use, each built for a generation of the properties
-    /// (at most one per thread).
+    /// Engines not in use, each built for a generation of the properties:
+    /// one per thread at most of the current one (in-flight pairs hold
+    /// the others); older ones go when the generation changes.
     idle: Arc<Mutex<Vec<Pairs>>>,
 }
 
@@ -57,6 +58,7 @@ impl Workers {
         })
     }
 
+    /// The pairs computed at once.
     pub(super) fn threads(&self) -> usize {
         self.threads
     }
