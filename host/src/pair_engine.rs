@@ -23,8 +23,8 @@ use crate::fixed_engine::{self, FrameEngine, HostEngine, prepare};
 use crate::outputs::{OutputSpec, PairFields};
 use crate::page_buffer::ByteBuffer;
 use crate::pipeline::Compute;
-use crate::settings::{Setting, Settings};
-use crate::{Gray, HostError};
+use crate::settings::Settings;
+use crate::{Gray, HostError, workers};
 
 /// The engine of a stream of pairs: settings checked once, and each
 /// thread's engine memory kept from pair to pair.
@@ -71,18 +71,7 @@ impl PairEngine {
         let threads = settings.threads().max(1);
         let pool = match threads {
             1 => None,
-            n => Some(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n - 1)
-                    .thread_name(|i| format!("reynoldsflow-pair-{i}"))
-                    .build()
-                    .map_err(|e| {
-                        HostError::setting(
-                            Setting::Threads,
-                            format!("cannot start {n} threads: {e}"),
-                        )
-                    })?,
-            ),
+            n => Some(workers::kept_pool(n - 1, "reynoldsflow-pair")?),
         };
         Ok(Self {
             compute,

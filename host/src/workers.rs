@@ -1,17 +1,38 @@
-//! The host's one way to use several cores: scoped OS threads
+//! How the host uses several cores. Within one call: scoped OS threads
 //! (`std::thread::scope`), each with its own state (an engine, buffers).
 //! [`map_indices`] spreads independent jobs (the items of `dataset`, the
 //! tiles of one pair, the pairs of an in-memory clip) over them; `run`'s
 //! pipeline runs its reader, workers and writer as scoped threads too.
+//! The jobs are few and coarse (an item, a tile, a pair), workers block on
+//! I/O and channels, and `dataset` nests `run`'s pipeline inside each item:
+//! plain scoped threads nest without one pool's thread waiting on, or
+//! stealing from, another.
 //!
-//! Why not a work-stealing pool (rayon): the jobs are few and coarse (an
-//! item, a tile, a pair), workers block on I/O and channels, and `dataset`
-//! nests `run`'s pipeline inside each item: plain scoped threads nest
-//! without one pool's thread waiting on, or stealing from, another, and
-//! need no dependency.
+//! From one call to the next, for a stream of pairs where starting threads
+//! for each would cost more than waking them: a [`kept_pool`] (the pair
+//! engine's helpers, the GStreamer element's workers).
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+use crate::HostError;
+use crate::settings::Setting;
+
+/// `threads` threads kept until the pool is dropped (which lets the jobs
+/// given to it finish), named `name-0`, `name-1`, …; failing to start them
+/// is an error of the threads setting.
+pub fn kept_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, HostError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(move |i| format!("{name}-{i}"))
+        .build()
+        .map_err(|e| {
+            HostError::setting(
+                Setting::Threads,
+                format!("cannot start {threads} more threads: {e}"),
+            )
+        })
+}
 
 /// `work(state, i)` for every `i` in `0..count`, spread over `threads`
 /// scoped threads (this thread is one of them), each with its own `state`

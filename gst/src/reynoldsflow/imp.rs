@@ -32,11 +32,10 @@ use reynoldsflow_host::pair_stream::{Frame, Output, PairStream};
 use reynoldsflow_host::settings::{self as values, FirstFrame, Setting, Settings};
 use reynoldsflow_host::{Gray, HostError};
 
-use super::outbox::{Item, Outbox, Slot};
-use super::pairs::{Failure, PairOutput, Pairs};
+use super::outbox::{Item, Outbox, Ready, Slot};
+use super::pairs::{Failure, PairOutput, Pairs, Stamps, outputs_of};
 use super::workers::{Recipe, Workers};
 use super::{FirstFrameMode, ScaleMode, VariantMode};
-use crate::cues;
 
 static CAT: LazyLock<gst::DebugCategory> = LazyLock::new(|| {
     gst::DebugCategory::new(
@@ -108,43 +107,13 @@ impl Properties {
     }
 }
 
-/// A buffer's timing, given to the output that carries its label.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Stamps {
-    pts: Option<gst::ClockTime>,
-    dts: Option<gst::ClockTime>,
-    duration: Option<gst::ClockTime>,
-    offset: u64,
-    offset_end: u64,
-}
-
-impl Stamps {
-    fn of(buffer: &gst::BufferRef) -> Self {
-        Self {
-            pts: buffer.pts(),
-            dts: buffer.dts(),
-            duration: buffer.duration(),
-            offset: buffer.offset(),
-            offset_end: buffer.offset_end(),
-        }
-    }
-
-    fn apply(&self, buffer: &mut gst::BufferRef) {
-        buffer.set_pts(self.pts);
-        buffer.set_dts(self.dts);
-        buffer.set_duration(self.duration);
-        buffer.set_offset(self.offset);
-        buffer.set_offset_end(self.offset_end);
-    }
-}
-
 /// How the pairs are computed.
 enum Compute {
     /// As each frame arrives, on the streaming thread and the engine's
     /// helpers.
-    Here(Pairs),
+    Here(Box<Pairs>),
     /// Whole pairs on the workers, each with the recipe of its engine.
-    Workers(Workers, Recipe),
+    Workers(Workers, Arc<Recipe>),
 }
 
 /// A pair's result as the stream hands it on.
@@ -162,7 +131,7 @@ struct State {
     stream: PairStream<Stamps, Arc<Gray>>,
     /// Outputs made from the last input, not yet handed downstream (when
     /// computed here).
-    pending: VecDeque<Pending>,
+    pending: VecDeque<Ready>,
     compute: Option<Compute>,
     /// Whether the source is live (asked once per stream).
     live: Option<bool>,
@@ -568,8 +537,8 @@ impl BaseTransformImpl for ReynoldsFlow {
         // out in its place among them.
         while let Some(next) = self.next_pending() {
             match next {
-                Pending::Buffer(buffer) => return Ok(GenerateOutputSuccess::Buffer(buffer)),
-                Pending::Gap(gap) => {
+                Ready::Buffer(buffer) => return Ok(GenerateOutputSuccess::Buffer(buffer)),
+                Ready::Gap(gap) => {
                     self.obj().src_pad().push_event(gap);
                 }
             }
@@ -588,13 +557,6 @@ fn frame_duration(info: &gst_video::VideoInfo) -> Option<gst::ClockTime> {
     (num > 0).then(|| gst::ClockTime::SECOND.mul_div_floor(den, num))?
 }
 
-/// What goes downstream next from the streaming thread, in order.
-enum Pending {
-    Buffer(gst::Buffer),
-    /// A gap in the input, passed on.
-    Gap(gst::Event),
-}
-
 impl ReynoldsFlow {
     fn outbox(&self) -> &Arc<Outbox> {
         self.outbox
@@ -602,7 +564,7 @@ impl ReynoldsFlow {
             .expect("made when the element is constructed")
     }
 
-    fn next_pending(&self) -> Option<Pending> {
+    fn next_pending(&self) -> Option<Ready> {
         lock(&self.state).pending.pop_front()
     }
 
@@ -655,7 +617,7 @@ impl ReynoldsFlow {
             let gap = gst::event::Gap::builder(stamps.pts.unwrap_or(gst::ClockTime::ZERO))
                 .duration(stamps.duration)
                 .build();
-            self.queue_gap(state, gap);
+            self.queue_ready(state, Ready::Gap(gap));
             return Ok(state.workers());
         }
         let (width, height) = (in_info.width() as usize, in_info.height() as usize);
@@ -730,12 +692,12 @@ impl ReynoldsFlow {
         };
         if !current {
             let compute = match here {
-                true => Compute::Here(
+                true => Compute::Here(Box::new(
                     Pairs::new(&settings, properties.cues, generation)
                         .map_err(|f| self.fail(&f))?,
-                ),
+                )),
                 false => {
-                    let recipe = Recipe {
+                    let recipe = Arc::new(Recipe {
                         settings: Settings {
                             threads: Some(1),
                             ..settings.clone()
@@ -743,7 +705,7 @@ impl ReynoldsFlow {
                         cues: properties.cues,
                         generation,
                         out_info: out_info.clone(),
-                    };
+                    });
                     let workers = match state.compute.take() {
                         Some(Compute::Workers(w, _)) if w.threads() == threads => w,
                         _ => Workers::new(threads).map_err(|f| self.fail(&f))?,
@@ -793,14 +755,7 @@ impl ReynoldsFlow {
         outbox.push_ready();
         outbox.drain()?;
         while let Some(next) = self.next_pending() {
-            match next {
-                Pending::Buffer(buffer) => {
-                    self.obj().src_pad().push(buffer)?;
-                }
-                Pending::Gap(gap) => {
-                    self.obj().src_pad().push_event(gap);
-                }
-            }
+            next.push(self.obj().src_pad())?;
         }
         Ok(gst::FlowSuccess::Ok)
     }
@@ -852,20 +807,12 @@ impl ReynoldsFlow {
                         .map_err(|_| gst::FlowError::Error)?
                         .fill(0);
                     let output = PairOutput { image, cues: None };
-                    let mut discont = std::mem::take(&mut state.discont);
-                    for buffer in outputs_of(&self.obj(), output, &[label], &mut discont) {
-                        self.queue_buffer(state, buffer);
-                    }
+                    self.queue_done(state, output, &[label]);
                 }
                 Output::Result {
                     result: Computed::Done(output),
                     labels,
-                } => {
-                    let mut discont = std::mem::take(&mut state.discont);
-                    for buffer in outputs_of(&self.obj(), output, &labels, &mut discont) {
-                        state.pending.push_back(Pending::Buffer(buffer));
-                    }
-                }
+                } => self.queue_done(state, output, &labels),
                 Output::Result {
                     result: Computed::Queued(slot),
                     labels,
@@ -882,19 +829,20 @@ impl ReynoldsFlow {
         Ok(())
     }
 
-    /// A stamped output made here, in its place.
-    fn queue_buffer(&self, state: &mut State, buffer: gst::Buffer) {
-        match state.workers() {
-            Some(_) => self.outbox().add(Item::Buffer(buffer)),
-            None => state.pending.push_back(Pending::Buffer(buffer)),
+    /// An output made here, stamped, once per label.
+    fn queue_done(&self, state: &mut State, output: PairOutput, labels: &[Stamps]) {
+        let mut discont = std::mem::take(&mut state.discont);
+        for buffer in outputs_of(&self.obj(), output, labels, &mut discont) {
+            self.queue_ready(state, Ready::Buffer(buffer));
         }
     }
 
-    /// A gap, in its place.
-    fn queue_gap(&self, state: &mut State, gap: gst::Event) {
+    /// An output made here, in its place: after the workers' ones when
+    /// they compute the pairs.
+    fn queue_ready(&self, state: &mut State, ready: Ready) {
         match state.workers() {
-            Some(_) => self.outbox().add(Item::Gap(gap)),
-            None => state.pending.push_back(Pending::Gap(gap)),
+            Some(_) => self.outbox().add(Item::Ready(ready)),
+            None => state.pending.push_back(ready),
         }
     }
 }
@@ -907,39 +855,4 @@ impl State {
             _ => None,
         }
     }
-}
-
-/// A pair's output once per label, stamped (the copy for an earlier label
-/// shares the image's memory), `DISCONT` on the first when `discont` (then
-/// cleared), with its cues as metas (and their message posted).
-pub(super) fn outputs_of(
-    element: &super::ReynoldsFlow,
-    output: PairOutput,
-    labels: &[Stamps],
-    discont: &mut bool,
-) -> Vec<gst::Buffer> {
-    let last = labels.len().saturating_sub(1);
-    let mut buffers = Vec::with_capacity(labels.len());
-    let PairOutput { mut image, cues } = output;
-    for (i, stamps) in labels.iter().enumerate() {
-        let mut out = match i == last {
-            true => std::mem::replace(&mut image, gst::Buffer::new()),
-            false => image.copy(),
-        };
-        let buffer = out.make_mut();
-        stamps.apply(buffer);
-        if std::mem::take(discont) {
-            buffer.set_flags(gst::BufferFlags::DISCONT);
-        }
-        if let Some((regions, level)) = &cues {
-            cues::add_metas(buffer, regions);
-            let structure = cues::message_structure(stamps.pts, *level, regions);
-            let message = gst::message::Element::builder(structure)
-                .src(element)
-                .build();
-            let _ = element.post_message(message);
-        }
-        buffers.push(out);
-    }
-    buffers
 }

@@ -16,11 +16,31 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 
 use gst::prelude::*;
 
-use super::imp::Stamps;
-use super::pairs::{Failure, PairOutput};
+use super::pairs::{Failure, PairOutput, Stamps, outputs_of};
 
 /// A pair's result, once its thread has computed it.
 pub(super) type Slot = Arc<Mutex<Option<Result<PairOutput, Failure>>>>;
+
+/// An output made on the streaming thread, ready to go.
+pub(super) enum Ready {
+    /// A stamped buffer.
+    Buffer(gst::Buffer),
+    /// A gap in the input, passed on in its place.
+    Gap(gst::Event),
+}
+
+impl Ready {
+    /// Push it on `pad`.
+    pub(super) fn push(self, pad: &gst::Pad) -> Result<gst::FlowSuccess, gst::FlowError> {
+        match self {
+            Self::Buffer(buffer) => pad.push(buffer),
+            Self::Gap(gap) => {
+                pad.push_event(gap);
+                Ok(gst::FlowSuccess::Ok)
+            }
+        }
+    }
+}
 
 /// One output, in stream order.
 pub(super) enum Item {
@@ -32,17 +52,15 @@ pub(super) enum Item {
         /// Its first output follows a reset.
         discont: bool,
     },
-    /// An output made on the streaming thread (stamped).
-    Buffer(gst::Buffer),
-    /// A gap in the input, passed on in its place.
-    Gap(gst::Event),
+    /// Made on the streaming thread.
+    Ready(Ready),
 }
 
 impl Item {
     fn ready(&self) -> bool {
         match self {
             Self::Pair { slot, .. } => lock(slot).is_some(),
-            Self::Buffer(_) | Self::Gap(_) => true,
+            Self::Ready(_) => true,
         }
     }
 }
@@ -195,11 +213,7 @@ impl Outbox {
     /// Push one output downstream (its stamps, cue metas and messages).
     fn push(&self, item: Item) -> Result<gst::FlowSuccess, gst::FlowError> {
         match item {
-            Item::Buffer(buffer) => self.src.push(buffer),
-            Item::Gap(gap) => {
-                self.src.push_event(gap);
-                Ok(gst::FlowSuccess::Ok)
-            }
+            Item::Ready(ready) => ready.push(&self.src),
             Item::Pair {
                 slot,
                 labels,
@@ -212,7 +226,7 @@ impl Outbox {
                     gst::FlowError::Error
                 })?;
                 let mut discont = discont;
-                for buffer in super::imp::outputs_of(&element, output, &labels, &mut discont) {
+                for buffer in outputs_of(&element, output, &labels, &mut discont) {
                     self.src.push(buffer)?;
                 }
                 Ok(gst::FlowSuccess::Ok)

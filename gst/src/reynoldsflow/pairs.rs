@@ -2,7 +2,8 @@
 //! the cues when asked, and the rows of an image whose output rows have
 //! padding. The streaming thread holds one (the pair's tiles on every
 //! thread, [`super::imp`]); each thread that computes whole pairs holds its
-//! own ([`super::workers`]).
+//! own ([`super::workers`]). And how a pair's output goes out: once per
+//! label, stamped ([`outputs_of`]).
 
 use gst_video::prelude::*;
 use reynoldsflow_cues::Region;
@@ -12,6 +13,7 @@ use reynoldsflow_host::pair_engine::PairEngine;
 use reynoldsflow_host::settings::Settings;
 
 use super::message;
+use crate::cues;
 
 /// One pair's image (not yet stamped) and cues.
 pub(super) struct PairOutput {
@@ -138,4 +140,69 @@ fn copy_rows(plane: &mut [u8], stride: usize, rgb: &[u8], row: usize) {
         pixels.copy_from_slice(&src[..pixels.len()]);
         padding.fill(0);
     }
+}
+
+/// A buffer's timing, given to the output that carries its label.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Stamps {
+    pub(super) pts: Option<gst::ClockTime>,
+    dts: Option<gst::ClockTime>,
+    pub(super) duration: Option<gst::ClockTime>,
+    offset: u64,
+    offset_end: u64,
+}
+
+impl Stamps {
+    pub(super) fn of(buffer: &gst::BufferRef) -> Self {
+        Self {
+            pts: buffer.pts(),
+            dts: buffer.dts(),
+            duration: buffer.duration(),
+            offset: buffer.offset(),
+            offset_end: buffer.offset_end(),
+        }
+    }
+
+    fn apply(&self, buffer: &mut gst::BufferRef) {
+        buffer.set_pts(self.pts);
+        buffer.set_dts(self.dts);
+        buffer.set_duration(self.duration);
+        buffer.set_offset(self.offset);
+        buffer.set_offset_end(self.offset_end);
+    }
+}
+
+/// A pair's output once per label, stamped (the copy for an earlier label
+/// shares the image's memory), `DISCONT` on the first when `discont` (then
+/// cleared), with its cues as metas (and their message posted).
+pub(super) fn outputs_of(
+    element: &super::ReynoldsFlow,
+    output: PairOutput,
+    labels: &[Stamps],
+    discont: &mut bool,
+) -> Vec<gst::Buffer> {
+    let last = labels.len().saturating_sub(1);
+    let mut buffers = Vec::with_capacity(labels.len());
+    let PairOutput { mut image, cues } = output;
+    for (i, stamps) in labels.iter().enumerate() {
+        let mut out = match i == last {
+            true => std::mem::replace(&mut image, gst::Buffer::new()),
+            false => image.copy(),
+        };
+        let buffer = out.make_mut();
+        stamps.apply(buffer);
+        if std::mem::take(discont) {
+            buffer.set_flags(gst::BufferFlags::DISCONT);
+        }
+        if let Some((regions, level)) = &cues {
+            cues::add_metas(buffer, regions);
+            let structure = cues::message_structure(stamps.pts, *level, regions);
+            let message = gst::message::Element::builder(structure)
+                .src(element)
+                .build();
+            let _ = element.post_message(message);
+        }
+        buffers.push(out);
+    }
+    buffers
 }

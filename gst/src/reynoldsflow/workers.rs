@@ -12,7 +12,8 @@
 use std::sync::{Arc, Mutex};
 
 use reynoldsflow_host::Gray;
-use reynoldsflow_host::settings::{Setting, Settings};
+use reynoldsflow_host::settings::Settings;
+use reynoldsflow_host::workers;
 
 use super::message;
 use super::outbox::{Outbox, Slot};
@@ -21,15 +22,14 @@ use super::pairs::{Failure, Pairs};
 /// The threads and each one's engine.
 pub(super) struct Workers {
     pool: rayon::ThreadPool,
-    threads: usize,
     /// Engines not in use, each built for a generation of the properties:
     /// one per thread at most of the current one (in-flight pairs hold
     /// the others); older ones go when the generation changes.
     idle: Arc<Mutex<Vec<Pairs>>>,
 }
 
-/// What a worker needs to build an engine for a pair.
-#[derive(Clone)]
+/// What a worker needs to build an engine for a pair (shared by the
+/// pairs of one generation).
 pub(super) struct Recipe {
     /// The properties' settings, one thread each.
     pub(super) settings: Settings,
@@ -41,26 +41,17 @@ pub(super) struct Recipe {
 impl Workers {
     /// `threads` threads.
     pub(super) fn new(threads: usize) -> Result<Self, Failure> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("reynoldsflow-worker-{i}"))
-            .build()
-            .map_err(|e| {
-                Failure::Settings(message(&reynoldsflow_host::HostError::setting(
-                    Setting::Threads,
-                    format!("cannot start {threads} threads: {e}"),
-                )))
-            })?;
+        let pool = workers::kept_pool(threads, "reynoldsflow-worker")
+            .map_err(|e| Failure::Settings(message(&e)))?;
         Ok(Self {
             pool,
-            threads,
             idle: Arc::default(),
         })
     }
 
     /// The pairs computed at once.
     pub(super) fn threads(&self) -> usize {
-        self.threads
+        self.pool.current_num_threads()
     }
 
     /// Check `recipe`'s settings by building an engine for it (kept for a
@@ -82,14 +73,18 @@ impl Workers {
     /// slot returned, which `outbox` is told of.
     pub(super) fn submit(
         &self,
-        recipe: &Recipe,
+        recipe: &Arc<Recipe>,
         prev: Arc<Gray>,
         next: Arc<Gray>,
         outbox: &Arc<Outbox>,
     ) -> Slot {
         let slot = Slot::default();
         outbox.computing();
-        let (idle, outbox, recipe) = (Arc::clone(&self.idle), Arc::clone(outbox), recipe.clone());
+        let (idle, outbox, recipe) = (
+            Arc::clone(&self.idle),
+            Arc::clone(outbox),
+            Arc::clone(recipe),
+        );
         let filled = Arc::clone(&slot);
         self.pool.spawn(move || {
             let compute = || {
