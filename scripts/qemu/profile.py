@@ -13,7 +13,8 @@ hiding nodes under `--min` percent.
 
   profile.py --nm llvm-nm ELF PROFILE PIXELS [--min 1.0]
 
-Needs pyelftools (scripts/install-embedded installs it).
+Needs pyelftools (scripts/install-embedded installs it into scripts/py-tools'
+environment: run it with that python).
 """
 
 import argparse
