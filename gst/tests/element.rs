@@ -765,6 +765,11 @@ enum Step {
     Caps(usize, usize),
     /// Frame `k` of the clip (at the last caps' size), stamped `k`.
     Frame(usize),
+    /// Frame `k`, flagged `DISCONT` (frames lost upstream before it).
+    Discont(usize),
+    /// A QoS event from downstream saying that frames up to `k` are late
+    /// (with `qos=true` the base class drops them before the element).
+    Late(usize),
     /// A GAP event at frame `k`.
     GapEvent(usize),
     /// An empty buffer flagged GAP at frame `k`.
@@ -850,13 +855,18 @@ fn stream_through(
                 size = (w, h);
                 rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
             }
-            Step::Frame(k) => {
+            Step::Frame(k) | Step::Discont(k) => {
                 let (w, h) = size;
                 let luma = &clip[k][..w * h];
-                assert_eq!(
-                    rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)),
-                    Ok(gst::FlowSuccess::Ok)
-                );
+                let mut frame = buffer(VideoFormat::Gray8, w, h, luma, k);
+                if let Step::Discont(_) = step {
+                    frame.make_mut().set_flags(gst::BufferFlags::DISCONT);
+                }
+                assert_eq!(rig.push(frame), Ok(gst::FlowSuccess::Ok));
+            }
+            Step::Late(k) => {
+                let qos = gst::event::Qos::new(gst::QOSType::Underflow, 1.0, 0, pts(k));
+                assert!(rig.push_upstream_event(qos));
             }
             Step::GapEvent(k) => {
                 assert!(rig.push_event(gst::event::Gap::builder(pts(k)).duration(pts(1)).build()))
@@ -1085,5 +1095,97 @@ fn the_pipeline_ends_when_downstream_ends_or_fails_early() {
                 "live={live} {downstream}: the pipeline hangs"
             );
         }
+    }
+}
+
+/// An input flagged `DISCONT` (frames lost upstream, a seek) and a frame
+/// the base class drops as late (`qos=true`) break the pair chain as a gap
+/// does: no output spans them, each output is the pair its stamp names,
+/// and the first output after each carries `DISCONT`: the same pair by
+/// pair (one thread, or a live source) and on the workers.
+#[test]
+fn a_discontinuity_or_a_frame_dropped_as_late_breaks_the_pair_chain() {
+    let (w, h) = (64, 48);
+    let clip = frames(16, w, h);
+    let mut steps = vec![Step::Caps(w, h)];
+    steps.extend((0..5).map(Step::Frame));
+    steps.push(Step::Discont(5));
+    steps.extend((6..10).map(Step::Frame));
+    // Frame 10 comes late: dropped before the element sees it.
+    steps.push(Step::Late(10));
+    steps.extend((10..16).map(Step::Frame));
+    let pieces = [0..5, 5..10, 11..16];
+    for first_frame in ["drop", "repeat", "black"] {
+        let mut seen = Vec::new();
+        for (threads, live) in [("1", false), ("2", false), ("3", false), ("3", true)] {
+            let properties = [
+                ("first-frame", first_frame),
+                ("threads", threads),
+                ("qos", "true"),
+            ];
+            let case = format!("first-frame={first_frame} threads={threads} live={live}");
+            let (out, _) = stream_through(&properties, live, &clip, &steps);
+            let stamps = |discont: bool| -> Vec<_> {
+                out.buffers
+                    .iter()
+                    .filter(|b| b.1 || !discont)
+                    .map(|b| b.0)
+                    .collect()
+            };
+            let firsts: Vec<_> = pieces.iter().map(|p| Some(pts(p.start))).collect();
+            assert_eq!(stamps(true), firsts, "{case}: DISCONT on these outputs");
+            let labelled: Vec<_> = match first_frame {
+                "drop" => pieces.iter().flat_map(|p| p.start..p.end - 1).collect(),
+                _ => pieces.iter().flat_map(|p| p.clone()).collect(),
+            };
+            let labelled: Vec<_> = labelled.into_iter().map(|k| Some(pts(k))).collect();
+            assert_eq!(stamps(false), labelled, "{case}: stamps");
+            if first_frame == "drop" {
+                let expected = pieces
+                    .iter()
+                    .flat_map(|p| expected_outputs(&clip[p.clone()], (w, h), &Settings::default()));
+                // 64 px rows of RGB have no padding: the bytes are packed.
+                let bytes = out.buffers.iter().map(|b| b.2.clone());
+                assert!(
+                    bytes.eq(expected),
+                    "{case}: an output is not its stamp's pair"
+                );
+            }
+            seen.push((case, out));
+        }
+        let (first_case, first) = &seen[0];
+        for (case, out) in &seen[1..] {
+            assert!(out == first, "{case} differs from {first_case}");
+        }
+    }
+}
+
+/// A POSITION query on the source pad answers the end of the last output
+/// pushed, pair by pair and on the workers.
+#[test]
+fn the_source_pad_answers_the_position_of_the_last_output() {
+    let (w, h) = (64, 48);
+    let clip = frames(9, w, h);
+    for (threads, live) in [("1", false), ("2", false), ("3", false), ("3", true)] {
+        let case = format!("threads={threads} live={live}");
+        let mut rig = harness_from(&[("threads", threads)], live);
+        rig.set_src_caps(caps(VideoFormat::Gray8, w, h));
+        let src = rig.element().unwrap().static_pad("src").unwrap();
+        let position = || {
+            let mut q = gst::query::Position::new(gst::Format::Time);
+            assert!(src.query(&mut q), "{case}: the query is answered");
+            q.result()
+        };
+        for (upto, last) in [(4, 2), (9, 7)] {
+            let from = if upto == 4 { 0 } else { 4 };
+            for (k, luma) in clip.iter().enumerate().take(upto).skip(from) {
+                rig.push(buffer(VideoFormat::Gray8, w, h, luma, k)).unwrap();
+            }
+            drain(&mut rig);
+            // The last output is stamped `last` (drop: the pair (last, last + 1)).
+            let end = gst::GenericFormattedValue::from(pts(last) + pts(1));
+            assert_eq!(position(), end, "{case}: after {upto} frames");
+        }
+        assert_eq!(std::iter::from_fn(|| rig.try_pull()).count(), 8, "{case}");
     }
 }

@@ -11,11 +11,16 @@
 //! faster than one pair takes, each thread computes whole pairs while the
 //! streaming thread goes on ([`super::workers`]), and the outputs leave in
 //! order from the [`Outbox`]; serialized events and queries wait for the
-//! outputs before them. The bytes are the same either way. The pair chain breaks
-//! (the next frame is a first frame again) on a flush, a stop, new caps, a
-//! gap (a GAP event or a buffer flagged GAP) and a timestamp going back; at
-//! new caps, a gap and EOS the last frame gets the output it still owes
-//! (`repeat`), so every frame gets one.
+//! outputs before them. The bytes are the same either way, and so is what
+//! travels with them: the element pushes every output itself (through the
+//! outbox), marking `DISCONT` and keeping the position for POSITION
+//! queries, on both paths. The pair chain breaks (the next frame is a
+//! first frame again) on a flush, a stop, new caps, a gap (a GAP event or
+//! a buffer flagged GAP), a discontinuity (a buffer flagged DISCONT, or one
+//! the base class drops as late with `qos=true`) and a timestamp going
+//! back; at new caps, a gap, a discontinuity and EOS the last frame gets
+//! the output it still owes (`repeat`), so every frame gets one; the first
+//! output after a flush, a stop or a discontinuity carries `DISCONT`.
 
 use std::collections::VecDeque;
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, OnceLock};
@@ -135,7 +140,8 @@ struct State {
     compute: Option<Compute>,
     /// Whether the source is live (asked once per stream).
     live: Option<bool>,
-    /// The next output follows a reset.
+    /// The next output follows a reset or a discontinuity: it carries
+    /// `DISCONT`.
     discont: bool,
 }
 
@@ -489,6 +495,11 @@ impl BaseTransformImpl for ReynoldsFlow {
                 // so an EOS still ends the pipeline.
                 let _ = self.flush_outputs();
             }
+            // The outputs before it were in the old segment.
+            gst::EventView::Segment(segment) => {
+                let _ = self.outbox().drain();
+                self.outbox().set_segment(segment.segment());
+            }
             // Every other serialized event goes on after the outputs before it.
             _ if event.is_serialized() => {
                 let _ = self.outbox().drain();
@@ -503,6 +514,15 @@ impl BaseTransformImpl for ReynoldsFlow {
         // before it.
         if direction == gst::PadDirection::Sink && query.is_serialized() {
             let _ = self.outbox().drain();
+        }
+        // The position of the outputs, which the element pushes itself
+        // (the base class knows only of buffers it pushes).
+        if let gst::QueryViewMut::Position(q) = query.view_mut()
+            && q.format() == gst::Format::Time
+            && let Some(position) = self.outbox().position()
+        {
+            q.set(position);
+            return true;
         }
         if !BaseTransformImplExt::parent_query(self, direction, query) {
             return false;
@@ -520,6 +540,29 @@ impl BaseTransformImpl for ReynoldsFlow {
         true
     }
 
+    fn submit_input_buffer(
+        &self,
+        is_discont: bool,
+        inbuf: gst::Buffer,
+    ) -> Result<gst::FlowSuccess, gst::FlowError> {
+        // (`is_discont` stays set in the base class until a buffer it
+        // pushes itself, and it pushes none: the element reads each
+        // buffer's own flag instead, in `process`.)
+        let submitted = self.parent_submit_input_buffer(is_discont, inbuf)?;
+        if submitted == gst_base::BASE_TRANSFORM_FLOW_DROPPED {
+            // Late (`qos=true`): the base class dropped the frame before
+            // the element sees it, so no pair may span it.
+            gst::debug!(
+                CAT,
+                imp = self,
+                "a frame dropped as late breaks the pair chain"
+            );
+            self.discontinuity(&mut lock(&self.state))?;
+            self.push_owed()?;
+        }
+        Ok(submitted)
+    }
+
     fn generate_output(&self) -> Result<GenerateOutputSuccess, gst::FlowError> {
         if let Some(input) = self.take_queued_buffer()
             && let Some(threads) = self.process(&input)?
@@ -531,18 +574,9 @@ impl BaseTransformImpl for ReynoldsFlow {
             outbox.wait_room(threads)?;
             return Ok(GenerateOutputSuccess::NoOutput);
         }
-        // Outputs computed here go after those of the workers, if any.
-        self.outbox().drain()?;
-        // Each buffer returned is pushed before the next call: a gap goes
-        // out in its place among them.
-        while let Some(next) = self.next_pending() {
-            match next {
-                Ready::Buffer(buffer) => return Ok(GenerateOutputSuccess::Buffer(buffer)),
-                Ready::Gap(gap) => {
-                    self.obj().src_pad().push_event(gap);
-                }
-            }
-        }
+        // Computed here: pushed now, after the workers' outputs if any
+        // (none is returned to the base class, see the outbox).
+        self.flush_outputs()?;
         Ok(GenerateOutputSuccess::NoOutput)
     }
 }
@@ -609,6 +643,11 @@ impl ReynoldsFlow {
         // Checked on every frame, the first included: a bad setting stops
         // the stream at once, naming its property.
         self.prepare(state, &properties, live, &out_info)?;
+        if input.flags().contains(gst::BufferFlags::DISCONT) {
+            // Frames lost upstream (a driver, packet loss, a seek): the
+            // frame before and this one are no consecutive frames.
+            self.discontinuity(state)?;
+        }
         let stamps = Stamps::of(input);
         if input.flags().contains(gst::BufferFlags::GAP) {
             // No frame here (its bytes, if any, show nothing): the stream
@@ -748,6 +787,15 @@ impl ReynoldsFlow {
         self.queue(state, owed.into_iter().collect())
     }
 
+    /// A discontinuity before the next frame: the stream ends here (the
+    /// last frame gets the output it owes) and the next output carries
+    /// `DISCONT`.
+    fn discontinuity(&self, state: &mut State) -> Result<(), gst::FlowError> {
+        self.end_locked(state)?;
+        state.discont = true;
+        Ok(())
+    }
+
     /// The outputs the streaming thread holds, after the workers' ones:
     /// pushed now (before an event).
     fn flush_outputs(&self) -> Result<gst::FlowSuccess, gst::FlowError> {
@@ -755,9 +803,21 @@ impl ReynoldsFlow {
         outbox.push_ready();
         outbox.drain()?;
         while let Some(next) = self.next_pending() {
-            next.push(self.obj().src_pad())?;
+            outbox.send(next)?;
         }
         Ok(gst::FlowSuccess::Ok)
+    }
+
+    /// The output a stream that ended between frames owes, on its way:
+    /// pushed now when made here (waiting for the workers' outputs before
+    /// it only then), in the outbox's turn when on the workers.
+    fn push_owed(&self) -> Result<gst::FlowSuccess, gst::FlowError> {
+        let outbox = self.outbox();
+        outbox.push_ready();
+        match lock(&self.state).pending.is_empty() {
+            true => Ok(gst::FlowSuccess::Ok),
+            false => self.flush_outputs(),
+        }
     }
 
     /// The pair `(prev, next)`: computed here, or handed to a worker.

@@ -1,8 +1,11 @@
-//! The outputs of pairs computed on other threads ([`super::workers`]),
-//! pushed downstream in stream order, each as soon as it and every output
-//! before it are ready. Whichever thread finds the front ready pushes (a
-//! worker that just finished a pair, or the streaming thread after adding
-//! a ready output), one at a time: no thread of its own to start and stop.
+//! The element's outputs, pushed downstream in stream order: every output
+//! leaves through here ([`Outbox::send`]), so the element marks `DISCONT`
+//! and keeps the position the same way on every path (the base class sees
+//! no output buffer). Those of pairs computed on other threads
+//! ([`super::workers`]) wait here until they and every output before them
+//! are ready. Whichever thread finds the front ready pushes (a worker that
+//! just finished a pair, or the streaming thread after adding a ready
+//! output), one at a time: no thread of its own to start and stop.
 //!
 //! The streaming thread waits here, never holding the element's state:
 //! for room before it takes the next frame (as many pairs computing as
@@ -27,19 +30,6 @@ pub(super) enum Ready {
     Buffer(gst::Buffer),
     /// A gap in the input, passed on in its place.
     Gap(gst::Event),
-}
-
-impl Ready {
-    /// Push it on `pad`.
-    pub(super) fn push(self, pad: &gst::Pad) -> Result<gst::FlowSuccess, gst::FlowError> {
-        match self {
-            Self::Buffer(buffer) => pad.push(buffer),
-            Self::Gap(gap) => {
-                pad.push_event(gap);
-                Ok(gst::FlowSuccess::Ok)
-            }
-        }
-    }
 }
 
 /// One output, in stream order.
@@ -80,10 +70,22 @@ struct Inner {
     failed: Option<gst::FlowError>,
 }
 
+/// Where the outputs are in the stream, for POSITION queries (the base
+/// class keeps it only for buffers it pushes itself).
+#[derive(Default)]
+struct Position {
+    /// The last time segment (none in a flush, or one in another format).
+    segment: Option<gst::FormattedSegment<gst::ClockTime>>,
+    /// The end of the last output pushed (its timestamp plus duration).
+    end: Option<gst::ClockTime>,
+}
+
 /// The element's outputs in order.
 pub(super) struct Outbox {
     inner: Mutex<Inner>,
     changed: Condvar,
+    /// Its own lock: a query reads it while a push is in hand.
+    position: Mutex<Position>,
     src: gst::Pad,
     element: gst::glib::WeakRef<super::ReynoldsFlow>,
 }
@@ -100,6 +102,7 @@ impl Outbox {
         Self {
             inner: Mutex::default(),
             changed: Condvar::new(),
+            position: Mutex::default(),
             src: element.src_pad().clone(),
             element: element.downgrade(),
         }
@@ -185,6 +188,38 @@ impl Outbox {
         inner.items.clear();
         inner.flushing = false;
         inner.failed = None;
+        // As the base class: a new segment comes after a flush.
+        *lock(&self.position) = Position::default();
+    }
+
+    /// The segment the next outputs are in.
+    pub(super) fn set_segment(&self, segment: &gst::Segment) {
+        lock(&self.position).segment = segment.downcast_ref::<gst::ClockTime>().cloned();
+    }
+
+    /// The stream time of the end of the last output pushed, once one is
+    /// (in a time segment).
+    pub(super) fn position(&self) -> Option<gst::ClockTime> {
+        let position = lock(&self.position);
+        position.segment.as_ref()?.to_stream_time(position.end?)
+    }
+
+    /// Push `ready` downstream now: a buffer's end is the position from
+    /// now on.
+    pub(super) fn send(&self, ready: Ready) -> Result<gst::FlowSuccess, gst::FlowError> {
+        match ready {
+            Ready::Buffer(buffer) => {
+                if let Some(pts) = buffer.pts() {
+                    let end = pts.saturating_add(buffer.duration().unwrap_or_default());
+                    lock(&self.position).end = Some(end);
+                }
+                self.src.push(buffer)
+            }
+            Ready::Gap(gap) => {
+                self.src.push_event(gap);
+                Ok(gst::FlowSuccess::Ok)
+            }
+        }
     }
 
     /// Push the ready outputs at the front, unless another thread is.
@@ -213,7 +248,7 @@ impl Outbox {
     /// Push one output downstream (its stamps, cue metas and messages).
     fn push(&self, item: Item) -> Result<gst::FlowSuccess, gst::FlowError> {
         match item {
-            Item::Ready(ready) => ready.push(&self.src),
+            Item::Ready(ready) => self.send(ready),
             Item::Pair {
                 slot,
                 labels,
@@ -227,7 +262,7 @@ impl Outbox {
                 })?;
                 let mut discont = discont;
                 for buffer in outputs_of(&element, output, &labels, &mut discont) {
-                    self.src.push(buffer)?;
+                    self.send(Ready::Buffer(buffer))?;
                 }
                 Ok(gst::FlowSuccess::Ok)
             }
