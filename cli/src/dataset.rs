@@ -20,7 +20,7 @@ use std::time::Instant;
 
 use reynoldsflow_host::dataset::{
     Item, ItemRunner, ItemSettings, Outcome, Shard, StatusLog, discover, manifest, record,
-    shard::parse_shard, shard_key,
+    shard::parse_shard, shard_key, side_folder_owner,
 };
 use reynoldsflow_host::sequence::input_error;
 use reynoldsflow_host::{HostError, pipeline, workers};
@@ -157,16 +157,13 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     let threads = args.engine.threads();
     // Checked before anything is created; the workers' share is set below.
     let item_settings = args.item_settings();
-    let checked = ItemRunner::new(&item_settings, threads, args.force)?;
-    // The sub-folders each item's side outputs go to (WebDataset: none).
-    let sides = if args.webdataset {
-        Vec::new()
-    } else {
-        checked.spec.subdirs()
-    };
+    ItemRunner::new(&item_settings, threads, args.force)?;
+    // Folders: no item's folder may lie in another's side-output folder.
+    let sides = !args.webdataset;
     let log = prepare_destination(args)?;
+    let _lock = lock_destination(args, shard)?;
     let all = find_items(args)?;
-    let (items, mut outcomes) = shard_items(args, shard, &all, &sides);
+    let (items, mut outcomes) = shard_items(args, shard, &all, sides);
     for (item, outcome) in items.iter().zip(&outcomes) {
         if let Some(outcome) = outcome {
             log.write(&record(item, &args.dst.join(&item.rel), outcome, 0.0))?;
@@ -204,6 +201,17 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     };
     for (i, outcome) in results {
         outcomes[i] = Some(outcome);
+    }
+    // Stopped before their turn (Ctrl-C): a record each all the same.
+    for (item, outcome) in items.iter().zip(&mut outcomes) {
+        if outcome.is_none() {
+            let not_started = Outcome::NotStarted;
+            let r = record(item, &args.dst.join(&item.rel), &not_started, 0.0);
+            if let Err(e) = log.write(&r) {
+                eprintln!("reynoldsflow: {e}");
+            }
+            *outcome = Some(not_started);
+        }
     }
     let failures = report(args, shard, all.len(), &items, &outcomes, started);
     if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
@@ -248,6 +256,38 @@ fn prepare_destination(args: &DatasetArgs) -> Result<StatusLog, HostError> {
     Ok(log)
 }
 
+/// The advisory lock of this shard of DST (`DST/.reynoldsflow-lock`, or
+/// `.reynoldsflow-lock-I-of-N` with `--shard I/N`), held until the run
+/// ends: a second run of the same shard on DST is refused, naming
+/// `--shard`, instead of redoing the items the first is making.
+fn lock_destination(args: &DatasetArgs, shard: Shard) -> Result<fs::File, HostError> {
+    let name = if shard == Shard::ALL {
+        ".reynoldsflow-lock".to_owned()
+    } else {
+        format!(".reynoldsflow-lock-{}-of-{}", shard.index, shard.count)
+    };
+    let path = args.dst.join(name);
+    let file = fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|e| HostError::io(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(fs::TryLockError::WouldBlock) => Err(HostError::invalid(
+            "--shard",
+            format!(
+                "another `reynoldsflow dataset` runs this share of {} (it holds {}); \
+                 to run several processes on one DST, give each its own --shard I/N",
+                args.dst.display(),
+                path.display()
+            ),
+        )),
+        Err(fs::TryLockError::Error(e)) => Err(HostError::io(&path, e)),
+    }
+}
+
 /// Every item of the dataset (the manifest's, or those found under SRC);
 /// none is an error.
 fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
@@ -266,18 +306,19 @@ fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
 }
 
 /// The items of `shard`, each with its outcome already decided (`Some`:
-/// it clashes with another item) or still to run (`None`); `sides`: the
-/// sub-folders of an item's folder its side outputs go to.
+/// it clashes with another item) or still to run (`None`); `sides`:
+/// whether items write side-output folders (folders, not WebDataset).
 fn shard_items(
     args: &DatasetArgs,
     shard: Shard,
     all: &[Item],
-    sides: &[&str],
+    sides: bool,
 ) -> (Vec<Item>, Vec<Option<Outcome>>) {
     // Two items writing one folder would mix their outputs: refuse the later
     // one, judged on every item so that all shards agree. So would an item
-    // whose folder is another's side-output folder (`x/hsv.y4m` beside
-    // `x.y4m --viz`): refuse the one inside.
+    // whose folder lies in another's side-output folder (`x/hsv.y4m` beside
+    // `x.y4m`), whatever the flags of this run or an earlier one: refuse
+    // the one inside.
     let by_folder: HashMap<&Path, &Item> = all.iter().rev().map(|o| (o.rel.as_path(), o)).collect();
     let mut items = Vec::new();
     let mut outcomes: Vec<Option<Outcome>> = Vec::new();
@@ -293,16 +334,10 @@ fn shard_items(
             )
         });
         let side = || {
-            let (parent, name) = (item.rel.parent()?, item.rel.file_name()?.to_str()?);
-            let side = sides.iter().find(|s| **s == name)?;
-            let owner = by_folder.get(parent)?;
-            let what = if *side == "hsv" {
-                "--viz images".to_owned()
-            } else {
-                format!("{side} fields (--npy, --flo)")
-            };
+            let (owner, side) = side_folder_owner(&item.rel, &by_folder).filter(|_| sides)?;
             Some(format!(
-                "its output folder {folder} is where {}'s {what} go; rename one",
+                "its output folder {folder} lies in {side}/, where {}'s {side} outputs go \
+                 (hsv/, v_c/, v_d/ and v_R/ are kept for side outputs, whatever the flags); rename one",
                 owner.src.display()
             ))
         };
@@ -411,7 +446,7 @@ fn report(
             }
             Some(Outcome::Skipped) => skipped += 1,
             Some(Outcome::Failed(why)) => failures.push((item, why)),
-            Some(Outcome::Interrupted) | None => not_started += 1,
+            Some(Outcome::Interrupted | Outcome::NotStarted) | None => not_started += 1,
         }
     }
     let share = if shard == Shard::ALL {

@@ -10,12 +10,19 @@ use tempfile::NamedTempFile;
 
 use crate::HostError;
 
+/// Temp files are named `.rfXXXXXX.tmp` (13 bytes), whatever the final
+/// name: a temp fits wherever its file's name fits (NAME_MAX), and every
+/// hidden `.tmp` name is one [`crate::outputs::clean_stale_temps`] removes.
+pub fn temp_builder() -> tempfile::Builder<'static, 'static> {
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".rf").suffix(".tmp").rand_bytes(6);
+    builder
+}
+
 /// A temp file in `dir` holding `bytes`, flushed to disk, to be renamed to
 /// `dir/name`. Dropped without renaming, it is deleted.
 fn stage(dir: &Path, name: &str, bytes: &[u8]) -> Result<NamedTempFile, HostError> {
-    let prefix = format!(".{name}.");
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
+    let mut builder = temp_builder();
     // tempfile creates 0600 files; ask for 0666 so the umask gives the
     // permissions an ordinary file would have once renamed.
     #[cfg(unix)]

@@ -549,8 +549,19 @@ pub struct DirWriter {
 struct Folder {
     root: PathBuf,
     spec: OutputSpec,
-    /// Each file written and its size ([`DirWriter::recording`]).
-    written: Option<Mutex<Vec<(PathBuf, u64)>>>,
+    /// Each file written ([`DirWriter::recording`]).
+    written: Option<Mutex<Vec<Written>>>,
+}
+
+/// A file a [`DirWriter::recording`] wrote.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Written {
+    /// Relative to the output folder, `/`-separated.
+    pub path: String,
+    /// Bytes.
+    pub size: u64,
+    /// XXH3-128 of the bytes, hex ([`crate::dataset::commit::hash_bytes`]).
+    pub hash: String,
 }
 
 /// One result for the writer threads to encode and write.
@@ -637,9 +648,9 @@ impl DirWriter {
         self.background.as_ref().map_or(Ok(()), Stage::flush)
     }
 
-    /// Every file written so far with its size in bytes, relative to the
-    /// output folder, sorted (empty unless [`Self::recording`]).
-    pub fn written(&self) -> Vec<(PathBuf, u64)> {
+    /// Every file written so far, sorted by path (empty unless
+    /// [`Self::recording`]).
+    pub fn written(&self) -> Vec<Written> {
         let Some(written) = &self.folder.written else {
             return Vec::new();
         };
@@ -737,7 +748,15 @@ impl Folder {
         atomic::write_file(&self.root.join(rel), bytes)?;
         if let Some(written) = &self.written {
             let mut written = written.lock().expect("no panics holding it");
-            written.push((rel.to_owned(), bytes.len() as u64));
+            let path: Vec<_> = rel
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy())
+                .collect();
+            written.push(Written {
+                path: path.join("/"),
+                size: bytes.len() as u64,
+                hash: crate::dataset::commit::hash_bytes(bytes),
+            });
         }
         Ok(())
     }
