@@ -45,11 +45,11 @@ Examples:
 Videos (mp4, avi, mkv, mov, webm, y4m, ...) become DST/<path>/<video stem>/000000.png, ...;
 folders holding PNG/JPEG/PGM frames become DST/<path>/ with the frames' stems.
 Resume: an item is finished when DST/<item>/.reynoldsflow-done (written last) records the same
-options and source (size and modification time) and its files are all there at their sizes;
-a rerun skips finished items and redoes the rest, removing the files of earlier settings first.
-Files are written under hidden temp names and renamed, so none is ever partial.
-Items sharing an output path (x/hsv.y4m beside x.y4m --viz) are refused. To run several
-processes on one DST, give each its --shard I/N.
+options, the same source (by a hash of its content) and every output (size and hash) as they are;
+a rerun skips finished items and redoes the rest into a staging folder, then replaces the old files.
+After a run that exits 0, every item holds exactly what `run` writes for it, and no temp file.
+Items sharing an output path, or inside another item's hsv/, v_c/, v_d/, v_R/, are refused.
+To run several processes on one DST, give each its --shard I/N (each share of DST is locked).
 A bad file is reported and skipped; the exit status is 1 if any item failed.
 One JSON line per item on stdout (or --status FILE): path, output, status, frames, outputs,
 seconds, error. In a Slurm job array (--array=0-7) the shard comes from SLURM_ARRAY_TASK_*;
@@ -161,7 +161,7 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     // Folders: no item's folder may lie in another's side-output folder.
     let sides = !args.webdataset;
     let log = prepare_destination(args)?;
-    let _lock = lock_destination(args, shard)?;
+    let _lock = lock_destination(args)?;
     let all = find_items(args)?;
     let (items, mut outcomes) = shard_items(args, shard, &all, sides);
     for (item, outcome) in items.iter().zip(&outcomes) {
@@ -256,36 +256,37 @@ fn prepare_destination(args: &DatasetArgs) -> Result<StatusLog, HostError> {
     Ok(log)
 }
 
-/// The advisory lock of this shard of DST (`DST/.reynoldsflow-lock`, or
-/// `.reynoldsflow-lock-I-of-N` with `--shard I/N`), held until the run
-/// ends: a second run of the same shard on DST is refused, naming
-/// `--shard`, instead of redoing the items the first is making.
-fn lock_destination(args: &DatasetArgs, shard: Shard) -> Result<fs::File, HostError> {
-    let name = if shard == Shard::ALL {
-        ".reynoldsflow-lock".to_owned()
+/// The advisory lock on the folder DST, held until the run ends: shared
+/// with `--shard` (the shares never meet), exclusive without. A second
+/// unsharded run, or an unsharded run beside sharded ones, is refused,
+/// naming `--shard`, instead of redoing the items the other is making.
+fn lock_destination(args: &DatasetArgs) -> Result<fs::File, HostError> {
+    let dst = &args.dst;
+    let folder = fs::File::open(dst).map_err(|e| HostError::io(dst, e))?;
+    let locked = if args.shard.is_some() || args.shards.is_some() || which_is_scheduled() {
+        folder.try_lock_shared()
     } else {
-        format!(".reynoldsflow-lock-{}-of-{}", shard.index, shard.count)
+        folder.try_lock()
     };
-    let path = args.dst.join(name);
-    let file = fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .map_err(|e| HostError::io(&path, e))?;
-    match file.try_lock() {
-        Ok(()) => Ok(file),
+    match locked {
+        Ok(()) => Ok(folder),
         Err(fs::TryLockError::WouldBlock) => Err(HostError::invalid(
             "--shard",
             format!(
-                "another `reynoldsflow dataset` runs this share of {} (it holds {}); \
-                 to run several processes on one DST, give each its own --shard I/N",
-                args.dst.display(),
-                path.display()
+                "another `reynoldsflow dataset` is writing into {} without --shard (or this run \
+                 has none and others are); to run several processes on one DST, give each its own --shard I/N",
+                dst.display()
             ),
         )),
-        Err(fs::TryLockError::Error(e)) => Err(HostError::io(&path, e)),
+        Err(fs::TryLockError::Error(e)) => Err(HostError::io(dst, e)),
     }
+}
+
+/// Whether a scheduler's variables give this process a shard.
+fn which_is_scheduled() -> bool {
+    ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some())
 }
 
 /// Every item of the dataset (the manifest's, or those found under SRC);

@@ -77,8 +77,7 @@ fn leftovers(dir: &Path) -> Vec<String> {
     fn walk(dir: &Path, found: &mut Vec<String>) {
         for e in fs::read_dir(dir).into_iter().flatten().flatten() {
             let name = e.file_name().to_string_lossy().into_owned();
-            if name.starts_with('.') && name != MANIFEST && !name.starts_with(".reynoldsflow-lock")
-            {
+            if name.starts_with('.') && name != MANIFEST {
                 found.push(e.path().display().to_string());
             } else if e.path().is_dir() {
                 walk(&e.path(), found);
@@ -502,16 +501,25 @@ fn a_second_unsharded_run_on_one_dst_is_refused_naming_shard() {
     fs::create_dir(&src).unwrap();
     fs::write(src.join("v.y4m"), clip(4, 0)).unwrap();
     fs::create_dir(&dst).unwrap();
-    // The lock another unsharded run holds.
-    let lock = fs::File::create(dst.join(".reynoldsflow-lock")).unwrap();
-    lock.lock().unwrap();
+    // The lock a run with --shard holds (shared): an unsharded run is
+    // refused, changing nothing; another shard runs beside it.
+    let lock = fs::File::open(&dst).unwrap();
+    lock.lock_shared().unwrap();
     let res = run(&args!["dataset", src, dst]);
     assert!(!res.status.success());
     assert!(stderr(&res).contains("--shard"), "{}", stderr(&res));
     assert!(!dst.join("v").exists());
-    // A shard takes a lock of its own.
     ok(&run(&args!["dataset", src, dst, "--shard", "0/2"]));
     ok(&run(&args!["dataset", src, dst, "--shard", "1/2"]));
+    drop(lock);
+    // The lock an unsharded run holds (exclusive): every other run is refused.
+    let lock = fs::File::open(&dst).unwrap();
+    lock.lock().unwrap();
+    assert!(
+        !run(&args!["dataset", src, dst, "--shard", "0/2"])
+            .status
+            .success()
+    );
     drop(lock);
     ok(&run(&args!["dataset", src, dst]));
 }
@@ -685,10 +693,7 @@ fn any_sequence_of_edits_kills_and_reruns_ends_in_runs_output() {
             }
             // Delete an output file.
             4 => {
-                let outs: Vec<String> = tree(&dst)
-                    .into_iter()
-                    .filter(|f| !f.contains(".reynoldsflow-lock"))
-                    .collect();
+                let outs: Vec<String> = tree(&dst).into_iter().collect();
                 if outs.is_empty() {
                     "delete no output".into()
                 } else {
@@ -788,7 +793,7 @@ fn any_sequence_of_edits_kills_and_reruns_ends_in_runs_output() {
                 .unwrap()
                 .flatten()
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.starts_with('.') && !n.starts_with(".reynoldsflow-lock"))
+                .filter(|n| n.starts_with('.'))
                 .collect();
             assert!(hidden.is_empty(), "{context}: {hidden:?}");
             let all = tar_members(&dst);

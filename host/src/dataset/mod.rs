@@ -443,7 +443,6 @@ impl ItemRunner {
             let old = commit::read(&out.join(MANIFEST));
             let journal = commit::read(&out.join(commit::JOURNAL));
             if !self.force
-                && journal.listed.is_empty()
                 && !out.join(commit::JOURNAL).exists()
                 && let Some(manifest) = &old.whole
                 && manifest.field("settings").as_str() == Some(self.fingerprint.as_str())
