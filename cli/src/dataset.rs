@@ -87,10 +87,11 @@ pub struct DatasetArgs {
     /// Write WebDataset shards instead of folders: DST/shard-NNNNNN.tar
     /// (shard-IIII-NNNNNN.tar with --shard I/N), one sample per result:
     /// KEY.rep.png (or .jpg), KEY.FIELD.npy / .flo as asked, and
-    /// KEY.json (source path, source frames, motion score, settings); KEY
-    /// is ITEM/STEM (the item's output path, the result's stem). Items
-    /// run one after another, each on every thread; a rerun skips the
-    /// items already in complete shards.
+    /// KEY.json (source path and hash, source frames, motion score,
+    /// settings); KEY is ITEM/STEM (the item's output path, the result's
+    /// stem). Items run one after another, each on every thread; a rerun
+    /// skips the items already in complete shards from the same source
+    /// and settings, and cuts the samples of changed items out first.
     #[arg(long, help_heading = "WebDataset")]
     pub webdataset: bool,
     /// Close a shard once it holds BYTES or more, between items (an item's

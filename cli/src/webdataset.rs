@@ -14,10 +14,12 @@
 //!
 //! Items run one after another, in their order, each on every thread, so
 //! the shards' contents depend on the items and options alone. An item is
-//! finished when its samples are in a complete shard with the same
-//! settings; a rerun skips those. A shard holding items of this run made
-//! with other settings stops the run (use another DST, or `--force`, which
-//! removes this shard's tars first).
+//! finished when its samples are in one complete shard, made with the same
+//! settings from the same source (`source_hash`, as the folders' manifests
+//! record it); a rerun skips those. Samples of an item that changed, or
+//! that left SRC, are cut out of this process's shards first
+//! ([`shards::rewrite_without`]); in another process's shards they stop
+//! the run. Keys never repeat: an item whose results would share one fails.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fs;

@@ -196,7 +196,7 @@ pub fn read(path: &Path) -> Listing {
             end_ok = true;
         }
     }
-    if let (Some(header), true) = (header, end_ok) {
+    if let (Some(header), true) = (header, end_ok && bytes.ends_with(b"\n")) {
         out.whole = Some(Manifest { header, files });
     }
     out
@@ -300,4 +300,121 @@ pub fn commit(
     let target = dir.join(MANIFEST);
     fs::rename(&journal, &target).map_err(|e| HostError::io(&target, e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn manifest() -> Manifest {
+        Manifest {
+            header: json!({"reynoldsflow_dataset_item": 2, "settings": "s", "source_hash": "h"}),
+            files: vec![
+                Output {
+                    path: "000000.png".into(),
+                    size: 3,
+                    hash: hash_bytes(b"abc"),
+                },
+                Output {
+                    path: "hsv/000000.png".into(),
+                    size: 1,
+                    hash: hash_bytes(b"d"),
+                },
+            ],
+        }
+    }
+
+    #[test]
+    fn a_manifest_is_trusted_only_whole_and_unaltered() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(MANIFEST);
+        let text = manifest().text(&[]);
+        fs::write(&path, &text).unwrap();
+        let read_back = read(&path);
+        assert_eq!(read_back.whole.unwrap().files, manifest().files);
+        // Cut at every line end, or anywhere: not whole, its listed files kept.
+        for cut in [text.len() - 1, text.rfind("{\"end\"").unwrap(), 10] {
+            fs::write(&path, &text[..cut]).unwrap();
+            let r = read(&path);
+            assert!(r.whole.is_none(), "cut at {cut}");
+            if cut > 100 {
+                assert!(r.listed.contains("hsv/000000.png"), "cut at {cut}");
+            }
+        }
+        // One byte changed (a size): not whole.
+        fs::write(&path, text.replace("\"size\":3", "\"size\":4")).unwrap();
+        assert!(read(&path).whole.is_none());
+        // Extra lines after the end: not whole.
+        fs::write(&path, format!("{text}{{\"file\":\"x.png\"}}\n")).unwrap();
+        assert!(read(&path).whole.is_none());
+        // The earlier format's file lines are listed for the clean-up.
+        fs::write(&path, "reynoldsflow dataset item\nfile: 12 000003.png\n").unwrap();
+        let r = read(&path);
+        assert!(r.whole.is_none() && r.listed.contains("000003.png"));
+        assert!(read(&dir.path().join("missing")).listed.is_empty());
+    }
+
+    #[test]
+    fn outputs_are_checked_by_size_and_content_and_extras_are_seen() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::create_dir(dir.path().join("hsv")).unwrap();
+        fs::write(dir.path().join("000000.png"), b"abc").unwrap();
+        fs::write(dir.path().join("hsv/000000.png"), b"d").unwrap();
+        fs::write(dir.path().join("notes.txt"), b"mine").unwrap();
+        assert!(manifest().intact(dir.path()));
+        fs::write(dir.path().join("000000.png"), b"abd").unwrap();
+        assert!(!manifest().intact(dir.path()), "same size, other bytes");
+        fs::write(dir.path().join("000000.png"), b"abc").unwrap();
+        fs::write(dir.path().join("hsv/000001.png"), b"e").unwrap();
+        assert!(!manifest().intact(dir.path()), "an extra output");
+        let mut own = own_files(dir.path());
+        own.sort();
+        assert_eq!(own, ["000000.png", "hsv/000000.png", "hsv/000001.png"]);
+        assert!(!own_path("../x.png") && !own_path("/x.png") && !own_path(MANIFEST));
+        assert!(own_path("v_R/000000.npy"));
+    }
+
+    #[test]
+    fn a_commit_replaces_exactly_the_old_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        fs::create_dir_all(d.join("v_R")).unwrap();
+        fs::create_dir_all(d.join("inner")).unwrap();
+        fs::write(d.join("v_R/000000.npy"), b"old").unwrap();
+        fs::write(d.join("000009.png"), b"old").unwrap();
+        fs::write(d.join("inner/000000.png"), b"a nested item's").unwrap();
+        fs::write(d.join("notes.txt"), b"mine").unwrap();
+        fs::create_dir_all(d.join(STAGING).join("hsv")).unwrap();
+        fs::write(d.join(STAGING).join("000000.png"), b"abc").unwrap();
+        fs::write(d.join(STAGING).join("hsv/000000.png"), b"d").unwrap();
+        let previous = ["v_R/000000.npy".to_owned()].into();
+        commit(d, &manifest(), &previous).unwrap();
+        let mut left: Vec<String> = walk(d);
+        left.sort();
+        assert_eq!(
+            left,
+            [
+                MANIFEST,
+                "000000.png",
+                "hsv/000000.png",
+                "inner/000000.png",
+                "notes.txt"
+            ]
+        );
+        assert!(read(&d.join(MANIFEST)).whole.is_some());
+        assert!(manifest().intact(d));
+    }
+
+    fn walk(dir: &Path) -> Vec<String> {
+        let mut out = Vec::new();
+        for e in fs::read_dir(dir).unwrap().flatten() {
+            let name = e.file_name().into_string().unwrap();
+            if e.path().is_dir() {
+                out.extend(walk(&e.path()).into_iter().map(|n| format!("{name}/{n}")));
+            } else {
+                out.push(name);
+            }
+        }
+        out
+    }
 }

@@ -15,7 +15,7 @@
 //!
 //! so every kind of output of one frame has the same stem, in a folder of
 //! its own. Each file is written to a hidden temp name in its folder
-//! (`.STEM.png.XXXXXX.tmp`) and renamed into place when complete: a file
+//! (`.rfXXXXXX.tmp`, short whatever the name) and renamed into place when complete: a file
 //! under its final name is never partial. Temp files left by a killed run
 //! are removed by the next run into the same folder ([`clean_stale_temps`]).
 //!
@@ -597,7 +597,9 @@ impl DirWriter {
             .prefix(".reynoldsflow-probe.")
             .tempfile_in(root)
             .map_err(|e| not_writable(root, e))?;
-        for sub in std::iter::once("").chain(spec.subdirs()) {
+        // Every side folder, asked for now or not: a run killed with other
+        // flags leaves its temps there too.
+        for sub in ["", "hsv", "v_c", "v_d", "v_R"] {
             clean_stale_temps(&root.join(sub))?;
         }
         Ok(Self {
@@ -763,7 +765,7 @@ impl Folder {
 }
 
 /// Remove the temp files of interrupted atomic writes in `dir`: hidden
-/// names ending in `.tmp` (`.NAME.XXXXXX.tmp`, as [`atomic`] names them).
+/// names ending in `.tmp` (`.rfXXXXXX.tmp`, as [`atomic`] names them).
 pub fn clean_stale_temps(dir: &Path) -> Result<usize, HostError> {
     let Ok(entries) = fs::read_dir(dir) else {
         return Ok(0);
