@@ -244,18 +244,18 @@ impl Shards<'_> {
         // Samples that are not current (another source, other settings, an
         // item no longer in SRC) go from this process's shards; in another
         // process's, they stop the run.
-        let listed: BTreeSet<&str> = keys.iter().map(String::as_str).collect();
+        let position: HashMap<&str, usize> = keys
+            .iter()
+            .enumerate()
+            .map(|(k, key)| (key.as_str(), k))
+            .collect();
         let mut stale_keys: BTreeSet<String> = BTreeSet::new();
         for (source, held) in &found {
-            let fresh = match keys.iter().position(|k| k == source) {
-                Some(k) => current(source, &hashes[k]),
+            let fresh = match position.get(source.as_str()) {
+                Some(&k) => current(source, &hashes[k]),
                 // Not an item of this run: kept unless SRC was searched and
                 // it is gone from this process's share.
-                None => {
-                    args.files_from.is_some()
-                        || !self.shard.contains(source)
-                        || listed.contains(source.as_str())
-                }
+                None => args.files_from.is_some() || !self.shard.contains(source),
             };
             if fresh {
                 continue;
