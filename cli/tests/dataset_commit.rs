@@ -231,6 +231,39 @@ fn f6_no_temp_survives_a_resume_with_other_flags() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "crash-injection"),
+    ignore = "the crash hook needs --features reynoldsflow-cli/crash-injection (scripts/test)"
+)]
+fn f6_run_again_with_other_flags_leaves_no_temp() {
+    let tmp = tempfile::tempdir().unwrap();
+    let video = tmp.path().join("v.y4m");
+    fs::write(&video, clip(6, 0)).unwrap();
+    let out = tmp.path().join("out");
+    let crashed = run_with(
+        &args![
+            "run",
+            video,
+            "--out",
+            out,
+            "--viz",
+            "--no-rep",
+            "--threads",
+            "1"
+        ],
+        None,
+        &[("REYNOLDSFLOW_ABORT_AFTER", OsStr::new("2"))],
+    );
+    assert!(!crashed.status.success());
+    assert!(
+        !temp_files(&out.join("hsv")).is_empty(),
+        "the crash left no temp"
+    );
+    ok(&run(&args!["run", video, "--out", out]));
+    assert_eq!(temp_files(&out), Vec::<String>::new());
+}
+
+#[test]
 fn f7_names_up_to_name_max_are_written_in_run_and_dataset() {
     let tmp = tempfile::tempdir().unwrap();
     let seq = tmp.path().join("src/seq");
