@@ -20,7 +20,7 @@ use std::time::Instant;
 
 use reynoldsflow_host::dataset::{
     Item, ItemRunner, ItemSettings, Outcome, Shard, StatusLog, discover, manifest, record,
-    shard::parse_shard, shard_key,
+    shard::parse_shard, shard_key, side_folder_owner,
 };
 use reynoldsflow_host::sequence::input_error;
 use reynoldsflow_host::{HostError, pipeline, workers};
@@ -45,11 +45,11 @@ Examples:
 Videos (mp4, avi, mkv, mov, webm, y4m, ...) become DST/<path>/<video stem>/000000.png, ...;
 folders holding PNG/JPEG/PGM frames become DST/<path>/ with the frames' stems.
 Resume: an item is finished when DST/<item>/.reynoldsflow-done (written last) records the same
-options and source (size and modification time) and its files are all there at their sizes;
-a rerun skips finished items and redoes the rest, removing the files of earlier settings first.
-Files are written under hidden temp names and renamed, so none is ever partial.
-Items sharing an output path (x/hsv.y4m beside x.y4m --viz) are refused. To run several
-processes on one DST, give each its --shard I/N.
+options, the same source (by a hash of its content) and every output (size and hash) as they are;
+a rerun skips finished items and redoes the rest into a staging folder, then replaces the old files.
+After a run that exits 0, every item holds exactly what `run` writes for it, and no temp file.
+Items sharing an output path, or inside another item's hsv/, v_c/, v_d/, v_R/, are refused.
+To run several processes on one DST, give each its --shard I/N (each share of DST is locked).
 A bad file is reported and skipped; the exit status is 1 if any item failed.
 One JSON line per item on stdout (or --status FILE): path, output, status, frames, outputs,
 seconds, error. In a Slurm job array (--array=0-7) the shard comes from SLURM_ARRAY_TASK_*;
@@ -87,10 +87,11 @@ pub struct DatasetArgs {
     /// Write WebDataset shards instead of folders: DST/shard-NNNNNN.tar
     /// (shard-IIII-NNNNNN.tar with --shard I/N), one sample per result:
     /// KEY.rep.png (or .jpg), KEY.FIELD.npy / .flo as asked, and
-    /// KEY.json (source path, source frames, motion score, settings); KEY
-    /// is ITEM/STEM (the item's output path, the result's stem). Items
-    /// run one after another, each on every thread; a rerun skips the
-    /// items already in complete shards.
+    /// KEY.json (source path and hash, source frames, motion score,
+    /// settings); KEY is ITEM/STEM (the item's output path, the result's
+    /// stem). Items run one after another, each on every thread; a rerun
+    /// skips the items already in complete shards from the same source
+    /// and settings, and cuts the samples of changed items out first.
     #[arg(long, help_heading = "WebDataset")]
     pub webdataset: bool,
     /// Close a shard once it holds BYTES or more, between items (an item's
@@ -157,16 +158,13 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     let threads = args.engine.threads();
     // Checked before anything is created; the workers' share is set below.
     let item_settings = args.item_settings();
-    let checked = ItemRunner::new(&item_settings, threads, args.force)?;
-    // The sub-folders each item's side outputs go to (WebDataset: none).
-    let sides = if args.webdataset {
-        Vec::new()
-    } else {
-        checked.spec.subdirs()
-    };
+    ItemRunner::new(&item_settings, threads, args.force)?;
+    // Folders: no item's folder may lie in another's side-output folder.
+    let sides = !args.webdataset;
     let log = prepare_destination(args)?;
+    let _lock = lock_destination(args)?;
     let all = find_items(args)?;
-    let (items, mut outcomes) = shard_items(args, shard, &all, &sides);
+    let (items, mut outcomes) = shard_items(args, shard, &all, sides);
     for (item, outcome) in items.iter().zip(&outcomes) {
         if let Some(outcome) = outcome {
             log.write(&record(item, &args.dst.join(&item.rel), outcome, 0.0))?;
@@ -204,6 +202,17 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
     };
     for (i, outcome) in results {
         outcomes[i] = Some(outcome);
+    }
+    // Stopped before their turn (Ctrl-C): a record each all the same.
+    for (item, outcome) in items.iter().zip(&mut outcomes) {
+        if outcome.is_none() {
+            let not_started = Outcome::NotStarted;
+            let r = record(item, &args.dst.join(&item.rel), &not_started, 0.0);
+            if let Err(e) = log.write(&r) {
+                eprintln!("reynoldsflow: {e}");
+            }
+            *outcome = Some(not_started);
+        }
     }
     let failures = report(args, shard, all.len(), &items, &outcomes, started);
     if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
@@ -248,6 +257,39 @@ fn prepare_destination(args: &DatasetArgs) -> Result<StatusLog, HostError> {
     Ok(log)
 }
 
+/// The advisory lock on the folder DST, held until the run ends: shared
+/// with `--shard` (the shares never meet), exclusive without. A second
+/// unsharded run, or an unsharded run beside sharded ones, is refused,
+/// naming `--shard`, instead of redoing the items the other is making.
+fn lock_destination(args: &DatasetArgs) -> Result<fs::File, HostError> {
+    let dst = &args.dst;
+    let folder = fs::File::open(dst).map_err(|e| HostError::io(dst, e))?;
+    let locked = if args.shard.is_some() || args.shards.is_some() || which_is_scheduled() {
+        folder.try_lock_shared()
+    } else {
+        folder.try_lock()
+    };
+    match locked {
+        Ok(()) => Ok(folder),
+        Err(fs::TryLockError::WouldBlock) => Err(HostError::invalid(
+            "--shard",
+            format!(
+                "another `reynoldsflow dataset` is writing into {} without --shard (or this run \
+                 has none and others are); to run several processes on one DST, give each its own --shard I/N",
+                dst.display()
+            ),
+        )),
+        Err(fs::TryLockError::Error(e)) => Err(HostError::io(dst, e)),
+    }
+}
+
+/// Whether a scheduler's variables give this process a shard.
+fn which_is_scheduled() -> bool {
+    ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some())
+}
+
 /// Every item of the dataset (the manifest's, or those found under SRC);
 /// none is an error.
 fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
@@ -266,18 +308,19 @@ fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
 }
 
 /// The items of `shard`, each with its outcome already decided (`Some`:
-/// it clashes with another item) or still to run (`None`); `sides`: the
-/// sub-folders of an item's folder its side outputs go to.
+/// it clashes with another item) or still to run (`None`); `sides`:
+/// whether items write side-output folders (folders, not WebDataset).
 fn shard_items(
     args: &DatasetArgs,
     shard: Shard,
     all: &[Item],
-    sides: &[&str],
+    sides: bool,
 ) -> (Vec<Item>, Vec<Option<Outcome>>) {
     // Two items writing one folder would mix their outputs: refuse the later
     // one, judged on every item so that all shards agree. So would an item
-    // whose folder is another's side-output folder (`x/hsv.y4m` beside
-    // `x.y4m --viz`): refuse the one inside.
+    // whose folder lies in another's side-output folder (`x/hsv.y4m` beside
+    // `x.y4m`), whatever the flags of this run or an earlier one: refuse
+    // the one inside.
     let by_folder: HashMap<&Path, &Item> = all.iter().rev().map(|o| (o.rel.as_path(), o)).collect();
     let mut items = Vec::new();
     let mut outcomes: Vec<Option<Outcome>> = Vec::new();
@@ -293,16 +336,10 @@ fn shard_items(
             )
         });
         let side = || {
-            let (parent, name) = (item.rel.parent()?, item.rel.file_name()?.to_str()?);
-            let side = sides.iter().find(|s| **s == name)?;
-            let owner = by_folder.get(parent)?;
-            let what = if *side == "hsv" {
-                "--viz images".to_owned()
-            } else {
-                format!("{side} fields (--npy, --flo)")
-            };
+            let (owner, side) = side_folder_owner(&item.rel, &by_folder).filter(|_| sides)?;
             Some(format!(
-                "its output folder {folder} is where {}'s {what} go; rename one",
+                "its output folder {folder} lies in {side}/, where {}'s {side} outputs go \
+                 (hsv/, v_c/, v_d/ and v_R/ are kept for side outputs, whatever the flags); rename one",
                 owner.src.display()
             ))
         };
@@ -411,7 +448,7 @@ fn report(
             }
             Some(Outcome::Skipped) => skipped += 1,
             Some(Outcome::Failed(why)) => failures.push((item, why)),
-            Some(Outcome::Interrupted) | None => not_started += 1,
+            Some(Outcome::Interrupted | Outcome::NotStarted) | None => not_started += 1,
         }
     }
     let share = if shard == Shard::ALL {

@@ -14,12 +14,14 @@
 //!
 //! Items run one after another, in their order, each on every thread, so
 //! the shards' contents depend on the items and options alone. An item is
-//! finished when its samples are in a complete shard with the same
-//! settings; a rerun skips those. A shard holding items of this run made
-//! with other settings stops the run (use another DST, or `--force`, which
-//! removes this shard's tars first).
+//! finished when its samples are in one complete shard, made with the same
+//! settings from the same source (`source_hash`, as the folders' manifests
+//! record it); a rerun skips those. Samples of an item that changed, or
+//! that left SRC, are cut out of this process's shards first
+//! ([`shards::rewrite_without`]); in another process's shards they stop
+//! the run. Keys never repeat: an item whose results would share one fails.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fs;
 use std::path::Path;
 use std::sync::atomic::Ordering;
@@ -28,7 +30,9 @@ use std::time::Instant;
 use serde_json::{Value, json};
 
 use reynoldsflow_host::HostError;
-use reynoldsflow_host::dataset::{Item, ItemRunner, Outcome, Shard, StatusLog, record, shard_key};
+use reynoldsflow_host::dataset::{
+    Item, ItemRunner, Outcome, Shard, StatusLog, commit, record, shard_key,
+};
 use reynoldsflow_host::outputs::shards::{self, ShardNames, ShardWriter};
 use reynoldsflow_host::pipeline::{self, Destination, Sample, SampleSink, Summary};
 use reynoldsflow_host::sequence::input_error;
@@ -92,8 +96,12 @@ fn sample_key(rel: &Path, stem: &str) -> String {
 struct ItemSamples<'a> {
     writer: &'a mut ShardWriter,
     rel: &'a Path,
+    src: &'a Path,
     source: String,
+    source_hash: String,
     settings: &'a Value,
+    /// The keys so far, with the stem each came from.
+    keys: HashMap<String, String>,
 }
 
 impl SampleSink for ItemSamples<'_> {
@@ -104,6 +112,15 @@ impl SampleSink for ItemSamples<'_> {
         sample: &Sample,
     ) -> Result<(), HostError> {
         let key = sample_key(self.rel, stem);
+        if let Some(first) = self.keys.insert(key.clone(), stem.to_owned()) {
+            return Err(input_error(
+                self.src,
+                format!(
+                    "the results {first} and {stem} would share the WebDataset key {key} \
+                     (a '.' in a stem becomes '_'); rename one of their frames"
+                ),
+            ));
+        }
         for (path, bytes) in &sample.files {
             self.writer.append(&member_name(&key, stem, path), bytes)?;
         }
@@ -111,6 +128,7 @@ impl SampleSink for ItemSamples<'_> {
             "key": key,
             "source": self.source,
             "source_frames": [frames.0, frames.1],
+            "source_hash": self.source_hash,
             "motion": sample.motion,
             "settings": self.settings,
         });
@@ -119,17 +137,25 @@ impl SampleSink for ItemSamples<'_> {
     }
 }
 
-/// What the complete shards in DST already hold of each item (by its
-/// source key): the shard, samples and frames of the items made with the
-/// current settings, and the items made with others.
+/// What one item's samples in the complete shards of DST say.
 #[derive(Default)]
-struct Existing {
-    done: BTreeMap<String, (String, usize, BTreeSet<usize>)>,
-    other: BTreeMap<String, String>,
+struct Held {
+    /// The shards holding its samples.
+    tars: BTreeSet<String>,
+    /// Its samples, and the input frames they used.
+    samples: usize,
+    frames: BTreeSet<usize>,
+    /// Each sample's settings and source hash, as found.
+    made_with: BTreeSet<(String, String)>,
+    /// Its keys.
+    keys: BTreeSet<String>,
 }
 
-fn existing(dst: &Path, settings: &Value) -> Result<Existing, HostError> {
-    let mut found = Existing::default();
+/// What the complete shards in DST hold of each item (by its source key);
+/// `mine`: whether a shard name is this process's. A damaged shard of this
+/// process (cut short, unreadable) is removed: its items are redone.
+fn existing(dst: &Path, mine: &ShardNames) -> Result<BTreeMap<String, Held>, HostError> {
+    let mut found: BTreeMap<String, Held> = BTreeMap::new();
     let mut names: Vec<String> = fs::read_dir(dst)
         .map_err(|e| HostError::io(dst, e))?
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
@@ -138,24 +164,36 @@ fn existing(dst: &Path, settings: &Value) -> Result<Existing, HostError> {
     names.sort();
     for name in names {
         let path = dst.join(&name);
-        for (member, bytes) in shards::json_members(&path)? {
+        let members = match shards::is_whole(&path) {
+            true => shards::json_members(&path),
+            false => Err(input_error(&path, "cut short")),
+        };
+        let members = match members {
+            Ok(members) => members,
+            Err(e) if mine.seq_of(&name).is_some() => {
+                eprintln!("reynoldsflow: {e}: removed, its items are made again");
+                fs::remove_file(&path).map_err(|e| HostError::io(&path, e))?;
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        for (member, bytes) in members {
             let meta: Value = serde_json::from_slice(&bytes)
                 .map_err(|e| input_error(&path, format!("{member}: {e}")))?;
             let Some(source) = meta["source"].as_str() else {
                 continue;
             };
-            if &meta["settings"] == settings {
-                let entry = found
-                    .done
-                    .entry(source.to_owned())
-                    .or_insert_with(|| (name.clone(), 0, BTreeSet::new()));
-                entry.1 += 1;
-                for f in meta["source_frames"].as_array().into_iter().flatten() {
-                    entry.2.extend(f.as_u64().map(|f| f as usize));
-                }
-            } else {
-                found.other.insert(source.to_owned(), name.clone());
+            let held = found.entry(source.to_owned()).or_default();
+            held.tars.insert(name.clone());
+            held.samples += 1;
+            for f in meta["source_frames"].as_array().into_iter().flatten() {
+                held.frames.extend(f.as_u64().map(|f| f as usize));
             }
+            held.made_with.insert((
+                meta["settings"].to_string(),
+                meta["source_hash"].as_str().unwrap_or("").to_owned(),
+            ));
+            held.keys.insert(shards::key_of(&member).to_owned());
         }
     }
     Ok(found)
@@ -184,54 +222,98 @@ impl Shards<'_> {
         if runner.force {
             remove_shards(&args.dst, &names)?;
         }
+        let found = existing(&args.dst, &names)?;
+        let keys: Vec<String> = todo
+            .iter()
+            .map(|&i| shard_key(&args.src, &self.items[i]))
+            .collect();
+        // Each item's source by content, taken before it is read.
+        let hashes: Vec<Result<String, HostError>> = todo
+            .iter()
+            .map(|&i| commit::source_hash(&self.items[i]))
+            .collect();
+        let settings = runner.settings.to_string();
+        let current = |key: &str, hash: &Result<String, HostError>| -> bool {
+            let (Some(held), Ok(hash)) = (found.get(key), hash) else {
+                return false;
+            };
+            held.tars.len() == 1
+                && held.made_with.len() == 1
+                && held.made_with.contains(&(settings.clone(), hash.clone()))
+        };
+        // Samples that are not current (another source, other settings, an
+        // item no longer in SRC) go from this process's shards; in another
+        // process's, they stop the run.
+        let position: HashMap<&str, usize> = keys
+            .iter()
+            .enumerate()
+            .map(|(k, key)| (key.as_str(), k))
+            .collect();
+        let mut stale_keys: BTreeSet<String> = BTreeSet::new();
+        for (source, held) in &found {
+            let fresh = match position.get(source.as_str()) {
+                Some(&k) => current(source, &hashes[k]),
+                // Not an item of this run: kept unless SRC was searched and
+                // it is gone from this process's share.
+                None => args.files_from.is_some() || !self.shard.contains(source),
+            };
+            if fresh {
+                continue;
+            }
+            if let Some(tar) = held.tars.iter().find(|t| names.seq_of(t).is_none()) {
+                return Err(input_error(
+                    args.dst.join(tar),
+                    format!(
+                        "holds samples of {source} made with other options or from another source; \
+                         write into another DST, or rerun that shard's process first"
+                    ),
+                ));
+            }
+            stale_keys.extend(held.keys.iter().cloned());
+        }
+        if !stale_keys.is_empty() {
+            let tars: BTreeSet<&String> = found
+                .values()
+                .filter(|h| h.keys.iter().any(|k| stale_keys.contains(k)))
+                .flat_map(|h| &h.tars)
+                .collect();
+            for tar in tars {
+                shards::rewrite_without(&args.dst.join(tar), |key| stale_keys.contains(key))?;
+            }
+        }
         let mut writer = ShardWriter::new(
             &args.dst,
             names,
             args.shard_size.unwrap_or(DEFAULT_SHARD_SIZE),
         )?;
-        let found = if runner.force {
-            Existing::default()
-        } else {
-            existing(&args.dst, &runner.settings)?
-        };
-        let keys: Vec<String> = todo
-            .iter()
-            .map(|&i| shard_key(&args.src, &self.items[i]))
-            .collect();
-        if let Some((key, tar)) = keys
-            .iter()
-            .filter(|k| !found.done.contains_key(*k))
-            .find_map(|k| found.other.get_key_value(k))
-        {
-            return Err(input_error(
-                args.dst.join(tar),
-                format!(
-                    "holds samples of {key} made with other options; write into another DST, \
-                     or pass --force to remove this shard's tars and redo its items"
-                ),
-            ));
-        }
         let progress = Progress::new(Some(self.items.len() as u64), "items");
         let mut results = Vec::new();
         let mut log_error = None;
         let mut results_done = 0usize;
-        for (&i, key) in todo.iter().zip(&keys) {
+        for ((&i, key), hash) in todo.iter().zip(&keys).zip(hashes) {
             if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
                 break;
             }
             let item = &self.items[i];
             let item_started = Instant::now();
-            let (outcome, rec) = match found.done.get(key) {
-                Some((tar, samples, frames)) => {
+            let held = found.get(key).filter(|_| current(key, &hash));
+            let (outcome, rec) = match (held, hash) {
+                (Some(held), _) => {
+                    let tar = held.tars.first().expect("one shard");
                     let mut r = record(item, &args.dst.join(tar), &Outcome::Skipped, 0.0);
-                    (r.frames, r.outputs) = (Some(frames.len()), Some(*samples));
+                    (r.frames, r.outputs) = (Some(held.frames.len()), Some(held.samples));
                     r.source_frames = runner
                         .plan
                         .picks()
-                        .then(|| frames.iter().copied().collect());
+                        .then(|| held.frames.iter().copied().collect());
                     (Outcome::Skipped, r)
                 }
-                None => {
+                (None, Err(e)) => {
+                    let outcome = Outcome::Failed(e.to_string());
+                    let r = record(item, &args.dst, &outcome, 0.0);
+                    (outcome, r)
+                }
+                (None, Ok(hash)) => {
                     let tar = args.dst.join(writer.current_name());
                     let mut tick = || {
                         results_done += 1;
@@ -239,7 +321,7 @@ impl Shards<'_> {
                             results_done as f64 / self.started.elapsed().as_secs_f64().max(1e-9);
                         progress.message(format!("{results_done} results, {rate:.1}/s"));
                     };
-                    let outcome = self.one(item, key.clone(), &mut writer, &mut tick);
+                    let outcome = self.one(item, key.clone(), hash, &mut writer, &mut tick);
                     let seconds = item_started.elapsed().as_secs_f64();
                     let tar = match &outcome {
                         Outcome::Done(_) => tar,
@@ -271,19 +353,29 @@ impl Shards<'_> {
         &self,
         item: &Item,
         source: String,
+        source_hash: String,
         writer: &mut ShardWriter,
         on_output: &mut dyn FnMut(),
     ) -> Outcome {
         let runner = self.runner;
         writer.begin_item();
         let result = (|| -> Result<Summary, HostError> {
+            if item.rel.to_str().is_none() {
+                return Err(input_error(
+                    &item.src,
+                    "the path is not UTF-8, and WebDataset keys are text; rename it",
+                ));
+            }
             let mut frames =
                 reynoldsflow_host::dataset::open_item(&item.src, item.frames, &runner.plan)?;
             let mut sink = ItemSamples {
                 writer: &mut *writer,
                 rel: &item.rel,
+                src: &item.src,
                 source,
+                source_hash,
                 settings: &runner.settings,
+                keys: HashMap::new(),
             };
             let summary = pipeline::process(
                 &mut *frames,

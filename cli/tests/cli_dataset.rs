@@ -100,7 +100,7 @@ fn mirrors_videos_and_frame_folders_and_skips_finished_items() {
     }
     let marker = fs::read_to_string(dst.join("a/b/clip").join(MARKER)).unwrap();
     assert!(
-        marker.contains("frames: 5") && marker.contains("results: 4"),
+        marker.contains("\"frames\":5") && marker.contains("\"results\":4"),
         "{marker}"
     );
 

@@ -10,12 +10,20 @@ use tempfile::NamedTempFile;
 
 use crate::HostError;
 
-/// A temp file in `dir` holding `bytes`, flushed to disk, to be renamed to
-/// `dir/name`. Dropped without renaming, it is deleted.
-fn stage(dir: &Path, name: &str, bytes: &[u8]) -> Result<NamedTempFile, HostError> {
-    let prefix = format!(".{name}.");
+/// Temp files are named `.rfXXXXXX.tmp` (13 bytes), whatever the final
+/// name: a temp fits wherever its file's name fits (NAME_MAX), and every
+/// hidden `.tmp` name is one [`crate::outputs::clean_stale_temps`] removes.
+pub fn temp_builder() -> tempfile::Builder<'static, 'static> {
     let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
+    builder.prefix(".rf").suffix(".tmp").rand_bytes(6);
+    builder
+}
+
+/// A temp file in `path`'s directory holding `bytes`, flushed to disk, to
+/// be renamed to `path`. Dropped without renaming, it is deleted.
+fn stage(path: &Path, bytes: &[u8]) -> Result<NamedTempFile, HostError> {
+    let dir = parent_dir(path);
+    let mut builder = temp_builder();
     // tempfile creates 0600 files; ask for 0666 so the umask gives the
     // permissions an ordinary file would have once renamed.
     #[cfg(unix)]
@@ -27,7 +35,7 @@ fn stage(dir: &Path, name: &str, bytes: &[u8]) -> Result<NamedTempFile, HostErro
         .tempfile_in(dir)
         .map_err(|e| HostError::io(dir, e))?;
     // Errors name the file being made, not its hidden temp (which the drop removes).
-    let failed = |e| HostError::io(dir.join(name), e);
+    let failed = |e| HostError::io(path, e);
     tmp.write_all(bytes).map_err(failed)?;
     // Flush before the rename, so a crash cannot expose an empty file under the final name.
     tmp.as_file().sync_all().map_err(failed)?;
@@ -44,8 +52,7 @@ fn parent_dir(path: &Path) -> &Path {
 
 /// Write `bytes` to `path` atomically. The directory must exist.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), HostError> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    let tmp = stage(parent_dir(path), name, bytes)?;
+    let tmp = stage(path, bytes)?;
     tmp.persist(path)
         .map_err(|e| HostError::io(path, e.error))?;
     Ok(())
@@ -60,7 +67,11 @@ pub fn write_files(dir: &Path, files: &[(&str, &[u8])]) -> Result<(), HostError>
     fs::create_dir_all(dir).map_err(|e| HostError::io(dir, e))?;
     let staged: Result<Vec<(NamedTempFile, PathBuf)>, HostError> = files
         .iter()
-        .map(|&(name, bytes)| Ok((stage(dir, name, bytes)?, dir.join(name))))
+        .map(|&(name, bytes)| {
+            // Staged beside its final name (the same directory, for the rename).
+            let path = dir.join(name);
+            Ok((stage(&path, bytes)?, path))
+        })
         .collect();
     let staged = match staged {
         Ok(staged) => staged,

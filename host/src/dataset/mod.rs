@@ -8,21 +8,21 @@
 //! - A frame folder `SRC/a/seq1/` (any folder directly holding PNG/JPEG/PGM
 //!   files) → `DST/a/seq1/`, outputs named by the frames' stems.
 //!
-//! **Resume.** An item is finished when its output folder holds the marker
-//! `.reynoldsflow-done`, written (atomically) after the item's last output.
-//! It records the settings, the source's stamp (size and modification time) and every
-//! output file with its size; a rerun skips items whose marker matches the
-//! current settings and source and whose files are all there at those
-//! sizes, and redoes the rest (`force` redoes everything). A redo first
-//! removes the files the old marker lists and any file named as one of the
-//! item's results (what a killed run leaves), so the folder holds exactly
-//! what the new settings write. Every output file is written under a hidden
-//! temp name and renamed, so no file under a final name is ever partial;
-//! the temp files a killed run leaves are removed when its item is redone.
+//! **Resume.** An item is finished when its output folder holds the
+//! manifest `.reynoldsflow-done`, written last and atomically ([`commit`]):
+//! it records the settings, the source's identity by content (a hash of the
+//! video file, or of every frame file and its name) and every output with
+//! its size and hash. A rerun skips an item only when the manifest is whole
+//! and all three match; anything else (a changed or replaced source, new
+//! settings, an output missing, cut or edited, a manifest cut or altered)
+//! redoes it (`force` redoes everything). A redo writes into a staging
+//! folder and commits: the folder then holds exactly what the new settings
+//! write, and the clean-up removes only the files the old manifest lists.
 //!
-//! **Paths.** Items that would share an output folder, or whose folder is
-//! another item's side-output folder (`hsv/`, `v_R/`, …), are refused
-//! before anything runs (by the front end, which sees every item). Several
+//! **Paths.** Items that would share an output folder, or whose folder lies
+//! in another item's side-output folder (`hsv/`, `v_c/`, `v_d/`, `v_R/`,
+//! whatever the flags), are refused before anything runs
+//! ([`side_folder_clash`], by the front end, which sees every item). Several
 //! processes share one destination through [`Shard`]s, never by running
 //! the same job twice.
 //!
@@ -30,22 +30,23 @@
 //! their paths, so `N` processes share one dataset and one destination;
 //! each item's [`Record`] is one JSON line of a [`StatusLog`].
 
-use std::collections::HashSet;
+use std::collections::HashMap;
 use std::fs;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use serde_json::json;
 
+use crate::HostError;
 use crate::outputs::{DirWriter, ImageFormat, OutputSpec};
 use crate::pipeline::{self, Compute, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
 use crate::sequence::sampled::FramePlan;
 use crate::sequence::{self, FrameSource, InputSpec, input_error};
 use crate::settings::{Setting, Settings};
-use crate::{HostError, atomic};
 
+pub mod commit;
 pub mod shard;
 pub mod status;
 
@@ -118,8 +119,9 @@ impl ItemSettings {
     }
 }
 
-/// The completion marker in each finished item's output folder.
-pub const MARKER: &str = ".reynoldsflow-done";
+/// The manifest in each finished item's output folder.
+pub const MARKER: &str = commit::MANIFEST;
+use commit::MANIFEST;
 
 /// File extensions taken as videos (decoded natively for `.y4m`, by ffmpeg
 /// otherwise), compared case-insensitively.
@@ -301,6 +303,27 @@ pub fn listed<'a>(
     Ok(items)
 }
 
+/// The item of `by_folder` (output folders to items) whose side-output
+/// folder (`hsv/`, `v_c/`, `v_d/`, `v_R/`, written under any flags) holds
+/// the output folder `rel`, with that folder's name: `x/hsv.y4m` beside
+/// `x.y4m`, or a frame folder `x/v_R/` in the frame folder `x/`.
+pub fn side_folder_owner<'a>(
+    rel: &Path,
+    by_folder: &HashMap<&Path, &'a Item>,
+) -> Option<(&'a Item, &'static str)> {
+    let mut child = rel;
+    while let Some(parent) = child.parent() {
+        if let Some(owner) = by_folder.get(parent) {
+            let name = child.file_name().and_then(|n| n.to_str());
+            if let Some(side) = commit::SIDE_FOLDERS.iter().find(|s| Some(**s) == name) {
+                return Some((owner, side));
+            }
+        }
+        child = parent;
+    }
+    None
+}
+
 /// The key an item is sharded by: its source path relative to `src`, with
 /// `/` separators (the file name when SRC is the item itself).
 pub fn shard_key(src: &Path, item: &Item) -> String {
@@ -327,198 +350,8 @@ pub enum Outcome {
     Failed(String),
     /// Stopped by Ctrl-C before it was finished.
     Interrupted,
-}
-
-/// The marker's text: what was made, from which source (its stamp, see
-/// [`source_stamp`]), with which options (and, when `--step` or `--fps`
-/// picked them, the input frames used), and every file with its size.
-fn marker_text(
-    item: &Item,
-    summary: &Summary,
-    options: &str,
-    stamp: &str,
-    files: &[(PathBuf, u64)],
-) -> String {
-    let mut text = format!(
-        "reynoldsflow dataset item\nsource: {}\nsource_stamp: {stamp}\nframes: {}\nresults: {}\noutputs: {}\noptions: {options}\n",
-        item.src.display(),
-        summary.frames,
-        summary.results,
-        summary.outputs
-    );
-    if let Some(used) = &summary.source_frames {
-        let list: Vec<String> = used.iter().map(usize::to_string).collect();
-        text += &format!("source_frames: {}\n", list.join(" "));
-    }
-    for (path, size) in files {
-        text += &format!("file: {size} {}\n", path.display());
-    }
-    text
-}
-
-/// A finished item's marker: its source stamp, options line, frames and
-/// outputs, and its files with their sizes.
-struct Marker {
-    stamp: Option<String>,
-    options: String,
-    frames: Option<usize>,
-    outputs: Option<usize>,
-    source_frames: Option<Vec<usize>>,
-    files: Vec<(u64, PathBuf)>,
-}
-
-impl Marker {
-    /// Whether every file the marker lists is in `out` at its size.
-    fn intact(&self, out: &Path) -> bool {
-        self.files.iter().all(|(size, rel)| {
-            fs::metadata(out.join(rel)).is_ok_and(|m| m.is_file() && m.len() == *size)
-        })
-    }
-}
-
-fn finished(out: &Path) -> Option<Marker> {
-    let text = fs::read_to_string(out.join(MARKER)).ok()?;
-    let field = |name: &str| text.lines().find_map(|l| l.strip_prefix(name));
-    Some(Marker {
-        stamp: field("source_stamp: ").map(str::to_owned),
-        options: field("options: ")?.to_owned(),
-        frames: field("frames: ").and_then(|v| v.parse().ok()),
-        outputs: field("outputs: ").and_then(|v| v.parse().ok()),
-        source_frames: field("source_frames: ").map(|v| {
-            v.split_whitespace()
-                .filter_map(|n| n.parse().ok())
-                .collect()
-        }),
-        files: text
-            .lines()
-            .filter_map(|l| l.strip_prefix("file: ")?.split_once(' '))
-            .filter_map(|(size, path)| Some((size.parse().ok()?, PathBuf::from(path))))
-            .collect(),
-    })
-}
-
-/// What an item's outputs were made from: a video's size and modification
-/// time (nanoseconds since 1970); a frame folder's number of frame files,
-/// their bytes, and a digest (FNV-1a) of each one's name, size and
-/// modification time. A rerun redoes an item whose stamp differs.
-fn source_stamp(item: &Item) -> Result<String, HostError> {
-    let stat = |path: &Path| -> Result<(u64, u128), HostError> {
-        let meta = fs::metadata(path).map_err(|e| HostError::io(path, e))?;
-        let mtime = meta
-            .modified()
-            .ok()
-            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-            .map_or(0, |d| d.as_nanos());
-        Ok((meta.len(), mtime))
-    };
-    if !item.frames {
-        let (size, mtime) = stat(&item.src)?;
-        return Ok(format!("size={size} mtime_ns={mtime}"));
-    }
-    let fnv = |hash: u64, bytes: &[u8]| {
-        bytes.iter().fold(hash, |h, &b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-        })
-    };
-    let files = crate::sequence::folder::list(&item.src, |name| is_frame_file(Path::new(name)))?;
-    let (mut bytes, mut digest) = (0, 0xcbf2_9ce4_8422_2325);
-    for file in &files {
-        let (size, mtime) = stat(file)?;
-        let name = file.file_name().unwrap_or_default().as_encoded_bytes();
-        digest = fnv(
-            fnv(fnv(digest, name), &size.to_le_bytes()),
-            &mtime.to_le_bytes(),
-        );
-        bytes += size;
-    }
-    Ok(format!(
-        "frames={} bytes={bytes} digest={digest:016x}",
-        files.len()
-    ))
-}
-
-/// The sub-folders of an item's folder its side outputs go to, under any
-/// settings, with the extensions of their files; `""`: the folder itself.
-const OUTPUT_FOLDERS: [(&str, [&str; 2]); 5] = [
-    ("", ["png", "jpg"]),
-    ("hsv", ["png", "jpg"]),
-    ("v_c", ["npy", "flo"]),
-    ("v_d", ["npy", "flo"]),
-    ("v_R", ["npy", "flo"]),
-];
-
-/// Whether `stem` names a result of `item` under some settings: a frame's
-/// stem (a video's frames are numbered, `000000`, …; a frame folder's are
-/// its files' stems) or two of them joined by `_` (`--step`, `--fps`).
-fn result_stems(item: &Item) -> impl Fn(&str) -> bool + use<> {
-    let frames: Option<HashSet<String>> = item.frames.then(|| {
-        crate::sequence::folder::list(&item.src, |name| is_frame_file(Path::new(name)))
-            .unwrap_or_default()
-            .iter()
-            .filter_map(|f| Some(f.file_stem()?.to_str()?.to_owned()))
-            .collect()
-    });
-    let frame = move |s: &str| match &frames {
-        Some(stems) => stems.contains(s),
-        None => s.len() >= 6 && s.bytes().all(|b| b.is_ascii_digit()),
-    };
-    move |stem: &str| {
-        frame(stem)
-            || stem
-                .match_indices('_')
-                .any(|(i, _)| frame(&stem[..i]) && frame(&stem[i + 1..]))
-    }
-}
-
-/// Remove what earlier runs made in `out`: the files `old`'s marker lists,
-/// and every file named as one of `item`'s results (in the folder, as an
-/// image; in `hsv/`, `v_c/`, `v_d/`, `v_R/`, as their files), which a run
-/// killed before its marker leaves; then the marker, then those
-/// sub-folders left empty. Nothing else (a folder of an item inside, or
-/// files of other names) is touched. Files first: a kill in between leaves
-/// a marker whose files are missing, which is redone.
-fn remove_earlier_outputs(out: &Path, old: Option<&Marker>, item: &Item) -> Result<(), HostError> {
-    for (_, rel) in old.iter().flat_map(|m| &m.files) {
-        // Only paths inside the folder, as this tool writes them.
-        if rel.components().next().is_some()
-            && rel.components().all(|c| matches!(c, Component::Normal(_)))
-        {
-            remove_if_present(&out.join(rel))?;
-        }
-    }
-    let is_result = result_stems(item);
-    for (sub, extensions) in OUTPUT_FOLDERS {
-        let dir = out.join(sub);
-        let Ok(entries) = fs::read_dir(&dir) else {
-            continue;
-        };
-        for entry in entries.flatten() {
-            let name = entry.file_name();
-            let Some((stem, ext)) = name.to_str().and_then(|n| n.rsplit_once('.')) else {
-                continue;
-            };
-            if extensions.contains(&ext)
-                && is_result(stem)
-                && entry.file_type().is_ok_and(|t| t.is_file())
-            {
-                remove_if_present(&entry.path())?;
-            }
-        }
-    }
-    remove_if_present(&out.join(MARKER))?;
-    for (sub, _) in &OUTPUT_FOLDERS[1..] {
-        // Fails, as it should, unless the folder is empty.
-        let _ = fs::remove_dir(out.join(sub));
-    }
-    Ok(())
-}
-
-/// Remove the file `path`; one already gone is fine.
-fn remove_if_present(path: &Path) -> Result<(), HostError> {
-    match fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(HostError::io(path, e)),
-        _ => Ok(()),
-    }
+    /// Not begun: the run was stopped by Ctrl-C before it came to this item.
+    NotStarted,
 }
 
 /// An item's frames, as `dataset` reads them (a frame folder, or a video),
@@ -598,48 +431,90 @@ impl ItemRunner {
         })
     }
 
-    /// One item into the folder `out`: skipped when finished from the same
-    /// source with these options and all its files there, else made anew
-    /// (what earlier runs left removed first), then marked finished.
+    /// One item into the folder `out`: skipped when its manifest is whole
+    /// and records this source (by content), these settings and every
+    /// output as it is; else made anew in a staging folder and committed
+    /// ([`commit`]), replacing exactly the files the old manifest lists.
     pub fn process(&self, item: &Item, out: &Path, on_output: &mut dyn FnMut()) -> Outcome {
-        // Taken before the source is read: a change while it is read is
-        // seen by the next run.
-        let stamp = source_stamp(item).ok();
-        let old = finished(out);
-        if !self.force
-            && let (Some(marker), Some(stamp)) = (&old, &stamp)
-            && marker.options == self.fingerprint
-            && marker.stamp.as_ref() == Some(stamp)
-            && marker.intact(out)
-        {
-            return Outcome::Skipped;
-        }
-        let result = (|| -> Result<Summary, HostError> {
-            if out.is_dir() {
-                remove_earlier_outputs(out, old.as_ref(), item)?;
+        let result = (|| -> Result<Option<Summary>, HostError> {
+            // Hashed before the source is read: a change while it is read is
+            // seen by the next run.
+            let source_hash = commit::source_hash(item)?;
+            let old = commit::read(&out.join(MANIFEST));
+            let journal = commit::read(&out.join(commit::JOURNAL));
+            if !self.force
+                && !out.join(commit::JOURNAL).exists()
+                && let Some(manifest) = &old.whole
+                && manifest.field("settings").as_str() == Some(self.fingerprint.as_str())
+                && manifest.field("source_hash").as_str() == Some(source_hash.as_str())
+                && manifest.intact(out)
+            {
+                commit::remove_staging(out)?;
+                return Ok(None);
             }
+            // The new settings meet the source before anything is removed.
             let mut source = open_item(&item.src, item.frames, &self.plan)?;
-            let dir = DirWriter::prepare(out, &self.spec)?
-                .recording()
-                .in_background(crate::outputs::WRITER_THREADS)?;
-            let summary = pipeline::process(
-                &mut *source,
-                &self.compute,
-                Destination::Dir(&dir),
-                self.options,
-                on_output,
-            )?;
-            if summary.frames == 0 {
-                return Err(input_error(&item.src, "no frames"));
+            if out.is_dir() {
+                commit::remove_staging(out)?;
+                // Temp files of single writes an earlier run was killed in.
+                for sub in std::iter::once("").chain(commit::SIDE_FOLDERS) {
+                    crate::outputs::clean_stale_temps(&out.join(sub))?;
+                }
             }
-            // A source whose stamp could not be taken is never skipped.
-            let stamp = stamp.as_deref().unwrap_or("unknown");
-            let text = marker_text(item, &summary, &self.fingerprint, stamp, &dir.written());
-            atomic::write_file(&out.join(MARKER), text.as_bytes())?;
-            Ok(summary)
+            let staging = out.join(commit::STAGING);
+            let made = (|| {
+                let dir = DirWriter::prepare(&staging, &self.spec)?
+                    .recording()
+                    .in_background(crate::outputs::WRITER_THREADS)?;
+                let summary = pipeline::process(
+                    &mut *source,
+                    &self.compute,
+                    Destination::Dir(&dir),
+                    self.options,
+                    on_output,
+                )?;
+                dir.flush()?;
+                if summary.frames == 0 {
+                    return Err(input_error(&item.src, "no frames"));
+                }
+                Ok((summary, dir.written()))
+            })();
+            let (summary, written) = match made {
+                Ok(made) => made,
+                Err(e) => {
+                    // Best effort: the error that matters is `e`.
+                    let _ = commit::remove_staging(out);
+                    return Err(e);
+                }
+            };
+            let mut header = json!({
+                "reynoldsflow_dataset_item": 2,
+                "source": item.src.display().to_string(),
+                "source_hash": source_hash,
+                "settings": self.fingerprint,
+                "frames": summary.frames,
+                "results": summary.results,
+                "outputs": summary.outputs,
+            });
+            if let Some(used) = &summary.source_frames {
+                header["source_frames"] = json!(used);
+            }
+            let files = written
+                .into_iter()
+                .map(|w| commit::Output {
+                    path: w.path,
+                    size: w.size,
+                    hash: w.hash,
+                })
+                .collect();
+            let mut previous = old.listed;
+            previous.extend(journal.listed);
+            commit::commit(out, &commit::Manifest { header, files }, &previous)?;
+            Ok(Some(summary))
         })();
         match result {
-            Ok(summary) => Outcome::Done(summary),
+            Ok(Some(summary)) => Outcome::Done(summary),
+            Ok(None) => Outcome::Skipped,
             Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
             Err(e) => Outcome::Failed(e.to_string()),
         }
@@ -665,13 +540,19 @@ pub fn record(item: &Item, out: &Path, outcome: &Outcome, seconds: f64) -> Recor
         }
         Outcome::Skipped => {
             r.status = Status::Skipped;
-            if let Some(m) = finished(out) {
-                (r.frames, r.outputs) = (m.frames, m.outputs);
-                r.source_frames = m.source_frames;
+            if let Some(m) = commit::read(&out.join(MANIFEST)).whole {
+                let count = |name| m.field(name).as_u64().map(|n| n as usize);
+                (r.frames, r.outputs) = (count("frames"), count("outputs"));
+                r.source_frames = m.field("source_frames").as_array().map(|v| {
+                    v.iter()
+                        .filter_map(|n| n.as_u64().map(|n| n as usize))
+                        .collect()
+                });
             }
         }
         Outcome::Failed(why) => (r.status, r.error) = (Status::Failed, Some(why.clone())),
         Outcome::Interrupted => r.status = Status::Interrupted,
+        Outcome::NotStarted => r.status = Status::NotStarted,
     }
     r
 }

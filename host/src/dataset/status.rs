@@ -23,6 +23,8 @@ pub enum Status {
     Failed,
     /// Stopped by Ctrl-C (or SIGTERM) before it was finished.
     Interrupted,
+    /// Not begun: the run was stopped by Ctrl-C (or SIGTERM) first.
+    NotStarted,
 }
 
 impl Status {
@@ -33,6 +35,7 @@ impl Status {
             Status::Skipped => "skipped",
             Status::Failed => "failed",
             Status::Interrupted => "interrupted",
+            Status::NotStarted => "not-started",
         }
     }
 }

@@ -28,13 +28,8 @@ pub(crate) fn abort_hook(dir: &Path, files: &[(PathBuf, Vec<u8>)]) {
     }
     if let Some((rel, bytes)) = files.first() {
         let path = dir.join(rel);
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
         let parent = path.parent().unwrap_or(dir);
-        if let Ok(tmp) = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".tmp")
-            .tempfile_in(parent)
-        {
+        if let Ok(tmp) = crate::atomic::temp_builder().tempfile_in(parent) {
             let _ = tmp.as_file().write_all(&bytes[..bytes.len() / 2]);
             let _ = tmp.keep();
         }

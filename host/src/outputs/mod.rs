@@ -15,7 +15,7 @@
 //!
 //! so every kind of output of one frame has the same stem, in a folder of
 //! its own. Each file is written to a hidden temp name in its folder
-//! (`.STEM.png.XXXXXX.tmp`) and renamed into place when complete: a file
+//! (`.rfXXXXXX.tmp`, short whatever the name) and renamed into place when complete: a file
 //! under its final name is never partial. Temp files left by a killed run
 //! are removed by the next run into the same folder ([`clean_stale_temps`]).
 //!
@@ -549,8 +549,19 @@ pub struct DirWriter {
 struct Folder {
     root: PathBuf,
     spec: OutputSpec,
-    /// Each file written and its size ([`DirWriter::recording`]).
-    written: Option<Mutex<Vec<(PathBuf, u64)>>>,
+    /// Each file written ([`DirWriter::recording`]).
+    written: Option<Mutex<Vec<Written>>>,
+}
+
+/// A file a [`DirWriter::recording`] wrote.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Written {
+    /// Relative to the output folder, `/`-separated.
+    pub path: String,
+    /// Bytes.
+    pub size: u64,
+    /// XXH3-128 of the bytes, hex ([`crate::dataset::commit::hash_bytes`]).
+    pub hash: String,
 }
 
 /// One result for the writer threads to encode and write.
@@ -586,7 +597,9 @@ impl DirWriter {
             .prefix(".reynoldsflow-probe.")
             .tempfile_in(root)
             .map_err(|e| not_writable(root, e))?;
-        for sub in std::iter::once("").chain(spec.subdirs()) {
+        // Every side folder, asked for now or not: a run killed with other
+        // flags leaves its temps there too.
+        for sub in ["", "hsv", "v_c", "v_d", "v_R"] {
             clean_stale_temps(&root.join(sub))?;
         }
         Ok(Self {
@@ -637,9 +650,9 @@ impl DirWriter {
         self.background.as_ref().map_or(Ok(()), Stage::flush)
     }
 
-    /// Every file written so far with its size in bytes, relative to the
-    /// output folder, sorted (empty unless [`Self::recording`]).
-    pub fn written(&self) -> Vec<(PathBuf, u64)> {
+    /// Every file written so far, sorted by path (empty unless
+    /// [`Self::recording`]).
+    pub fn written(&self) -> Vec<Written> {
         let Some(written) = &self.folder.written else {
             return Vec::new();
         };
@@ -737,14 +750,22 @@ impl Folder {
         atomic::write_file(&self.root.join(rel), bytes)?;
         if let Some(written) = &self.written {
             let mut written = written.lock().expect("no panics holding it");
-            written.push((rel.to_owned(), bytes.len() as u64));
+            let path: Vec<_> = rel
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy())
+                .collect();
+            written.push(Written {
+                path: path.join("/"),
+                size: bytes.len() as u64,
+                hash: crate::dataset::commit::hash_bytes(bytes),
+            });
         }
         Ok(())
     }
 }
 
 /// Remove the temp files of interrupted atomic writes in `dir`: hidden
-/// names ending in `.tmp` (`.NAME.XXXXXX.tmp`, as [`atomic`] names them).
+/// names ending in `.tmp` (`.rfXXXXXX.tmp`, as [`atomic`] names them).
 pub fn clean_stale_temps(dir: &Path) -> Result<usize, HostError> {
     let Ok(entries) = fs::read_dir(dir) else {
         return Ok(0);

@@ -234,6 +234,86 @@ impl ShardWriter {
     }
 }
 
+/// The key of a member name: up to the first dot of its last component,
+/// as the `webdataset` package splits it.
+pub fn key_of(member: &str) -> &str {
+    let base = member.rfind('/').map_or(0, |i| i + 1);
+    match member[base..].find('.') {
+        Some(dot) => &member[..base + dot],
+        None => member,
+    }
+}
+
+/// Whether the file at `path` ends as [`ShardWriter::finish`] ends a shard:
+/// whole 512-byte blocks, the last two of them zero (the archive's end).
+pub fn is_whole(path: &Path) -> bool {
+    let Ok(bytes) = fs::read(path) else {
+        return false;
+    };
+    bytes.len() >= 1024
+        && bytes.len() % 512 == 0
+        && bytes[bytes.len() - 1024..].iter().all(|&b| b == 0)
+}
+
+/// Rewrite the complete shard `path` without the members whose key `drop`
+/// says (through a temp file renamed over it; removed when nothing is
+/// left). The number of members kept.
+pub fn rewrite_without(path: &Path, drop: impl Fn(&str) -> bool) -> Result<usize, HostError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("shard.tar");
+    let mut archive = tar::Archive::new(File::open(path).map_err(|e| HostError::io(path, e))?);
+    let temp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| HostError::io(dir, e))?;
+    let (file, temp) = temp.into_parts();
+    let mut builder = tar::Builder::new(file);
+    let mut kept = 0;
+    for entry in archive.entries().map_err(|e| HostError::io(path, e))? {
+        let mut entry = entry.map_err(|e| HostError::io(path, e))?;
+        let member = entry
+            .path()
+            .map_err(|e| HostError::io(path, e))?
+            .to_string_lossy()
+            .into_owned();
+        if drop(key_of(&member)) {
+            continue;
+        }
+        let mut header = entry.header().clone();
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut entry, &mut bytes).map_err(|e| HostError::io(path, e))?;
+        builder
+            .append_data(&mut header, &member, bytes.as_slice())
+            .map_err(|e| HostError::io(&*temp, e))?;
+        kept += 1;
+    }
+    let file = builder.into_inner().map_err(|e| HostError::io(&*temp, e))?;
+    if kept == 0 {
+        drop_file(path)?;
+        return Ok(0);
+    }
+    file.sync_all().map_err(|e| HostError::io(&*temp, e))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = fs::metadata(path)
+            .map(|m| m.permissions().mode())
+            .unwrap_or(0o644);
+        let _ = fs::set_permissions(&*temp, fs::Permissions::from_mode(mode));
+    }
+    temp.persist(path)
+        .map_err(|e| HostError::io(path, e.error))?;
+    Ok(kept)
+}
+
+fn drop_file(path: &Path) -> Result<(), HostError> {
+    fs::remove_file(path).map_err(|e| HostError::io(path, e))
+}
+
 /// A member of a complete shard: `(member name, bytes)` of every `.json`.
 pub fn json_members(path: &Path) -> Result<Vec<(String, Vec<u8>)>, HostError> {
     let file = File::open(path).map_err(|e| HostError::io(path, e))?;

@@ -167,8 +167,20 @@ pub(crate) fn list(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBu
     let mut names = Vec::new();
     for entry in fs::read_dir(dir).map_err(|e| HostError::io(dir, e))? {
         let entry = entry.map_err(|e| HostError::io(dir, e))?;
-        let Ok(name) = entry.file_name().into_string() else {
-            continue;
+        let name = match entry.file_name().into_string() {
+            Ok(name) => name,
+            // Frames are named by their stems: one whose name is not
+            // UTF-8 is refused, never left out silently.
+            Err(odd) => {
+                let lossy = odd.to_string_lossy();
+                if !lossy.starts_with('.') && keep(&lossy) && entry.path().is_file() {
+                    return Err(input_error(
+                        entry.path(),
+                        "the file name is not UTF-8 (outputs are named by the frames' stems); rename it",
+                    ));
+                }
+                continue;
+            }
         };
         if name.starts_with('.') || !keep(&name) {
             continue;
