@@ -346,22 +346,6 @@ fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
     })
 }
 
-/// The fixed engine's λ range at the given intensity scale, from the core's
-/// integer bounds (`params`): `Λ8 = round(131072 · λ / s²) ∈ [1, 2³¹)`, and λ
-/// itself in Q32.32.
-pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> HostError {
-    let s = f64::from(intensity_scale.num()) / f64::from(intensity_scale.den());
-    let low = (s * s / 262_144.0).max(0.5f64.powi(33));
-    let high = 16_384.0 * s * s;
-    HostError::setting(
-        Setting::Lambda,
-        format!(
-            "{lambda} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
-             use the float engine or another intensity scale"
-        ),
-    )
-}
-
 /// Where results go.
 pub enum Destination<'a> {
     /// Files in a folder.
