@@ -259,9 +259,16 @@ fn fixed_params(intensity_scale: IntensityScale, lambda: f64) -> Result<Option<P
 /// patterns of positive `f64`s finds each end exactly. `None` where it
 /// takes none.
 fn lambda_bounds(intensity_scale: IntensityScale) -> Option<(f64, f64)> {
-    let takes = |bits: u64| matches!(fixed_params(intensity_scale, f64::from_bits(bits)), Ok(Some(_)));
+    let takes = |bits: u64| {
+        matches!(
+            fixed_params(intensity_scale, f64::from_bits(bits)),
+            Ok(Some(_))
+        )
+    };
     // One λ taken: Λ4 spans 2³⁰, so a power of two in every factor of 4 finds it.
-    let inside = (-80..=40).map(|e| 2f64.powi(e).to_bits()).find(|&b| takes(b))?;
+    let inside = (-80..=40)
+        .map(|e| 2f64.powi(e).to_bits())
+        .find(|&b| takes(b))?;
     // The first bit pattern in `lo..hi` where `takes` turns to `to`, given
     // `takes(lo) != to` and `takes(hi) == to`.
     let turn = |mut lo: u64, mut hi: u64, to: bool| {
@@ -285,12 +292,15 @@ fn lambda_bounds(intensity_scale: IntensityScale) -> Option<(f64, f64)> {
 /// inside it.
 fn three_digits(x: f64, up: bool) -> String {
     let nearest = format!("{x:.2e}");
-    let (mantissa, exponent) = nearest.split_once('e').expect("LowerExp writes an exponent");
+    let (mantissa, exponent) = nearest
+        .split_once('e')
+        .expect("LowerExp writes an exponent");
     let (mut units, mut exponent): (i64, i32) = (
         mantissa.replace('.', "").parse().expect("d.dd"),
         exponent.parse().expect("an integer exponent"),
     );
-    let value = |units: i64, exponent: i32| format!("{}.{:02}e{exponent}", units / 100, units % 100);
+    let value =
+        |units: i64, exponent: i32| format!("{}.{:02}e{exponent}", units / 100, units % 100);
     let written: f64 = nearest.parse().expect("a number");
     if up && written < x {
         units += 1;

@@ -566,7 +566,14 @@ mod tests {
 
     #[test]
     fn the_lambda_range_stated_is_the_range_taken() {
-        let scales = [(1, 1), (1, 255), (1, 1024), (3, 7), (6144, u32::MAX), (1, 6)];
+        let scales = [
+            (1, 1),
+            (1, 255),
+            (1, 1024),
+            (3, 7),
+            (6144, u32::MAX),
+            (1, 6),
+        ];
         for (num, den) in scales {
             let intensity_scale = IntensityScale::new(num, den).expect("in range");
             let with = |lambda: f64| Settings {

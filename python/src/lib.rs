@@ -468,7 +468,9 @@ fn stream_side(value: &Bound<'_, PyAny>, name: &str) -> PyResult<usize> {
         return Err(PyTypeError::new_err(format!(
             "Stream: {name}: {} {}; expected an integer number of pixels",
             type_name(),
-            value.repr().map_or_else(|_| "?".to_owned(), |r| r.to_string())
+            value
+                .repr()
+                .map_or_else(|_| "?".to_owned(), |r| r.to_string())
         )));
     };
     if index.lt(1)? {
