@@ -84,16 +84,6 @@ impl Compute {
             }
             EngineKind::Fixed => {
                 let params = core_params(intensity_scale, lambda)?;
-                // The parameters' integer bounds do not depend on the frame size.
-                match Config::new(1, 1, params) {
-                    Ok(_) => {}
-                    Err(CoreError::LambdaOutOfRange) => {
-                        return Err(lambda_range(intensity_scale, lambda));
-                    }
-                    Err(e) => {
-                        return Err(HostError::setting(Setting::IntensityScale, e.to_string()));
-                    }
-                }
                 compute.fixed = Some((params, core_scaling(scale)?));
             }
         }
@@ -228,18 +218,121 @@ pub(crate) fn float_pair(
     Ok(PairFields { planes, rep })
 }
 
-/// The core's parameters, λ rounded to its Q32.32 (the range of its
-/// integer bounds is checked by the core, see [`lambda_range`]).
+/// The core's parameters, λ rounded to its Q32.32 and within the core's
+/// integer bounds at this intensity scale, or the λ setting's error
+/// stating that range ([`lambda_range`]).
 pub(crate) fn core_params(
     intensity_scale: IntensityScale,
     lambda: f64,
 ) -> Result<Params, HostError> {
-    let lambda_q =
-        U32F32::checked_from_num(lambda).ok_or_else(|| lambda_range(intensity_scale, lambda))?;
-    Ok(Params {
+    match fixed_params(intensity_scale, lambda) {
+        Ok(Some(params)) => Ok(params),
+        Ok(None) => Err(lambda_range(intensity_scale, lambda)),
+        Err(e) => Err(HostError::setting(Setting::IntensityScale, e.to_string())),
+    }
+}
+
+/// The check of λ for the fixed engine, the one both the refusal and the
+/// range it states come from: λ as the core's Q32.32 (rounded to nearest),
+/// then the core's own bounds on `Λ4 = round(65536 · λ / s²)`
+/// (`Config::new` on a 1×1 frame: they do not depend on the frame size).
+/// `Ok(None)` where λ is outside them; `Err` where the core refuses
+/// something else (the intensity scale).
+fn fixed_params(intensity_scale: IntensityScale, lambda: f64) -> Result<Option<Params>, CoreError> {
+    let Some(lambda) = U32F32::checked_from_num(lambda) else {
+        return Ok(None);
+    };
+    let params = Params {
         scale: intensity_scale,
-        lambda: lambda_q,
-    })
+        lambda,
+    };
+    match Config::new(1, 1, params) {
+        Ok(_) => Ok(Some(params)),
+        Err(CoreError::LambdaOutOfRange) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// The least and the greatest λ the fixed engine takes at this intensity
+/// scale, found by [`fixed_params`] itself: the λ it takes form one
+/// interval (`Λ4` grows with λ), so a bisection over the ordered bit
+/// patterns of positive `f64`s finds each end exactly. `None` where it
+/// takes none.
+fn lambda_bounds(intensity_scale: IntensityScale) -> Option<(f64, f64)> {
+    let takes = |bits: u64| {
+        matches!(
+            fixed_params(intensity_scale, f64::from_bits(bits)),
+            Ok(Some(_))
+        )
+    };
+    // One λ taken: Λ4 spans 2³⁰, so a power of two in every factor of 4 finds it.
+    let inside = (-80..=40)
+        .map(|e| 2f64.powi(e).to_bits())
+        .find(|&b| takes(b))?;
+    // The first bit pattern in `lo..hi` where `takes` turns to `to`, given
+    // `takes(lo) != to` and `takes(hi) == to`.
+    let turn = |mut lo: u64, mut hi: u64, to: bool| {
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if takes(mid) == to {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    };
+    let low = turn(0, inside, true);
+    let high = turn(inside, f64::INFINITY.to_bits(), false) - 1;
+    Some((f64::from_bits(low), f64::from_bits(high)))
+}
+
+/// `x` to three significant digits (`1.23e-4`), rounded up (`up`) or
+/// down: the ends of a range written so that every number between them is
+/// inside it.
+fn three_digits(x: f64, up: bool) -> String {
+    let nearest = format!("{x:.2e}");
+    let (mantissa, exponent) = nearest
+        .split_once('e')
+        .expect("LowerExp writes an exponent");
+    let (mut units, mut exponent): (i64, i32) = (
+        mantissa.replace('.', "").parse().expect("d.dd"),
+        exponent.parse().expect("an integer exponent"),
+    );
+    let value =
+        |units: i64, exponent: i32| format!("{}.{:02}e{exponent}", units / 100, units % 100);
+    let written: f64 = nearest.parse().expect("a number");
+    if up && written < x {
+        units += 1;
+    } else if !up && written > x {
+        units -= 1;
+    }
+    if units == 1000 {
+        (units, exponent) = (100, exponent + 1);
+    } else if units == 99 {
+        (units, exponent) = (999, exponent - 1);
+    }
+    value(units, exponent)
+}
+
+/// The λ setting's refusal at this intensity scale, stating the range the
+/// fixed engine takes there ([`lambda_bounds`]), its ends rounded inwards.
+pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> HostError {
+    let range = match lambda_bounds(intensity_scale) {
+        Some((low, high)) => format!(
+            "about {} to {}",
+            three_digits(low, true),
+            three_digits(high, false)
+        ),
+        None => "it takes none".to_owned(),
+    };
+    HostError::setting(
+        Setting::Lambda,
+        format!(
+            "{lambda} is outside the fixed engine's range at this intensity scale ({range}); \
+             use the float engine or another intensity scale"
+        ),
+    )
 }
 
 /// The scale setting for the core, gains as its Q16.16.
@@ -261,22 +354,6 @@ fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
             format!("{which} = {k} is beyond the fixed engine's range [0, 65536)"),
         )
     })
-}
-
-/// The fixed engine's λ range at the given intensity scale, from the core's
-/// integer bounds (`params`): `Λ8 = round(131072 · λ / s²) ∈ [1, 2³¹)`, and λ
-/// itself in Q32.32.
-pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> HostError {
-    let s = f64::from(intensity_scale.num()) / f64::from(intensity_scale.den());
-    let low = (s * s / 262_144.0).max(0.5f64.powi(33));
-    let high = 16_384.0 * s * s;
-    HostError::setting(
-        Setting::Lambda,
-        format!(
-            "{lambda} is outside the fixed engine's range at this intensity scale (about {low:.2e} to {high:.2e}); \
-             use the float engine or another intensity scale"
-        ),
-    )
 }
 
 /// Where results go.

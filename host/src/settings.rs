@@ -553,6 +553,63 @@ mod tests {
         }
     }
 
+    /// `number` (as the refusal writes it, e.g. `7.63e-6`) moved by one
+    /// unit of its last digit, up or down.
+    fn one_digit_away(number: &str, up: bool) -> f64 {
+        let (mantissa, exponent) = number.split_once('e').expect("d.dde±x");
+        let digits = mantissa.len() - mantissa.find('.').map_or(mantissa.len(), |i| i + 1);
+        let units: i64 = mantissa.replace('.', "").parse().expect("digits");
+        let units = if up { units + 1 } else { units - 1 };
+        let exponent: i32 = exponent.parse().expect("exponent");
+        units as f64 * 10f64.powi(exponent - digits as i32)
+    }
+
+    #[test]
+    fn the_lambda_range_stated_is_the_range_taken() {
+        let scales = [
+            (1, 1),
+            (1, 255),
+            (1, 1024),
+            (3, 7),
+            (6144, u32::MAX),
+            (1, 6),
+        ];
+        for (num, den) in scales {
+            let intensity_scale = IntensityScale::new(num, den).expect("in range");
+            let with = |lambda: f64| Settings {
+                intensity_scale,
+                lambda,
+                ..Settings::default()
+            };
+            let message = with(1e9).compute().expect_err("out of range").to_string();
+            let stated = message
+                .split_once("(about ")
+                .and_then(|(_, rest)| rest.split_once(')'))
+                .map(|(range, _)| range)
+                .unwrap_or_else(|| panic!("no range in: {message}"));
+            let (low, high) = stated.split_once(" to ").expect("LOW to HIGH");
+            let at = |text: &str| text.parse::<f64>().expect("a number");
+            for inside in [at(low), at(high)] {
+                assert!(
+                    with(inside).compute().is_ok(),
+                    "s = {num}/{den}: {inside} is in the stated range ({stated}) but refused"
+                );
+            }
+            for outside in [one_digit_away(low, false), one_digit_away(high, true)] {
+                assert!(
+                    matches!(
+                        with(outside).compute(),
+                        Err(HostError::Setting {
+                            setting: Setting::Lambda,
+                            ..
+                        })
+                    ),
+                    "s = {num}/{den}: {outside}, just outside the stated range ({stated}), is taken"
+                );
+            }
+        }
+    }
+
     #[test]
     fn settings_are_checked_once_for_both_engines() {
         for engine in [EngineKind::Fixed, EngineKind::Float] {

@@ -6,9 +6,10 @@ with the wheel installed, from the repository root,
 1. compares represent_batch on CUDA with the Rust core
    (reynoldsflow.represent and reynoldsflow.fields on the CPU) on the
    golden pairs (tests/vectors, and the float32 planes of
-   tests/golden/*/fields.bin) and on 1 000 generated pairs, at both
-   parameter sets, both scalings and the three variants: RGB byte for
-   byte, v_c and v_d bit for bit;
+   tests/golden/*/fields.bin), on 1 000 generated pairs up to 160x120 and
+   on the 64 pairs of 640x480 that step 4 times, at both parameter sets,
+   both scalings and the three variants: RGB byte for byte, v_c and v_d
+   bit for bit;
 2. checks CUDA's torch.sqrt, and represent_batch's root, against the
    correctly rounded root on the CPU (NumPy's) on every non-negative finite
    float32 bit pattern (2^31 - 2^23 of them, in chunks);
@@ -18,7 +19,8 @@ with the wheel installed, from the repository root,
 4. checks its CUDA memory against the documented bound, and times
    represent_batch on CUDA at batches of 1, 16 and 64 pairs of
    640x480 against the CPU core (represent_clip, one thread and every
-   core), in pairs per second;
+   core), in pairs per second, each timed batch's bytes compared with the
+   core's;
 
 printing torch's, CUDA's, the driver's and the GPU's names first. Exits 0
 when everything is equal, 1 on any difference, 2 where there is no CUDA
@@ -212,9 +214,9 @@ def check_divisions(fails: Failures, total: int = 100_000_000) -> int:
     tail's units v_d (both parameter sets) and 255, denominators float32
     bit patterns uniform over det's range [1, 2^62] or over min-max ranges
     [1e-9, 2^20]."""
-    from reynoldsflow._core_params import core_constants
+    from reynoldsflow._core_params import checked_settings, core_constants
 
-    units = [core_constants(**p).v_d for p in PARAMS] + [255.0]
+    units = [core_constants(checked_settings("gpu_check", p)).v_d for p in PARAMS] + [255.0]
     as_bits = lambda x: int(np.array(x, np.float32).view(np.int32))
     spans = [(as_bits(1.0), as_bits(2.0**62)), (as_bits(1e-9), as_bits(2.0**20))]
     g = torch.Generator(device=DEVICE).manual_seed(49)
@@ -260,6 +262,14 @@ def check_memory(fails: Failures) -> int:
     return 17
 
 
+def check_timed_frames(fails: Failures, pairs: int = 64) -> int:
+    """The frames step 4 times (640x480, moving), ``pairs`` of them in one
+    batch, at every setting, against the core (as check_generated)."""
+    frames = moving_clip(pairs + 1, 640, 480)
+    compare_batch(frames[:-1], frames[1:], "640x480", fails)
+    return pairs
+
+
 def moving_clip(t: int, w: int, h: int) -> np.ndarray:
     y, x = np.mgrid[0:h, 0:w].astype(np.float64)
     grain = np.random.default_rng(7).integers(-6, 7, size=(h, w))
@@ -271,12 +281,15 @@ def moving_clip(t: int, w: int, h: int) -> np.ndarray:
     return np.stack(frames)
 
 
-def timings(device: str, rounds: int = 3) -> None:
+def timings(device: str, fails: Failures, rounds: int = 3) -> None:
     """Pairs per second at 640x480: represent_batch on ``device`` (CUDA:
     batches of 1, 16 and 64; the CPU: batches of 1 and 16 on one torch
     thread, and 16 on every core) against the CPU core (one thread, every
-    core), interleaved, medians; the ratio to the core on every core."""
+    core), interleaved, medians; the ratio to the core on every core.
+    Every timed batch's bytes are compared with the core's (after its
+    timing)."""
     frames = moving_clip(65, 640, 480)
+    core = torch.from_numpy(rf.represent_clip(frames, layout="chw"))
     t = torch.from_numpy(frames).to(device)
     sync = torch.cuda.synchronize if device == "cuda" else (lambda: None)
     cores = os.cpu_count() or 1
@@ -286,11 +299,13 @@ def timings(device: str, rounds: int = 3) -> None:
         torch.set_num_threads(threads)
         try:
             start = time.perf_counter()
-            represent_batch(t[:b], t[1:b + 1])
+            got = represent_batch(t[:b], t[1:b + 1])
             sync()
-            return b / (time.perf_counter() - start)
+            rate = b / (time.perf_counter() - start)
         finally:
             torch.set_num_threads(before)
+        fails.check(torch.equal(got.cpu(), core[:b]), f"timed 640x480 batch of {b} on {device}")
+        return rate
 
     def core_rate(threads: int) -> float:
         start = time.perf_counter()
@@ -336,14 +351,17 @@ def main() -> int:
     if args.cpu_timings:
         print(f"torch {torch.__version__}, reynoldsflow {rf.__version__}, {os.cpu_count()} CPUs, "
               f"torch threads {torch.get_num_threads()}")
-        timings("cpu")
-        return 0
+        fails = Failures()
+        timings("cpu", fails)
+        print(f"timed batches: {'equal' if fails.count == 0 else 'DIFFERENT'}")
+        return 0 if fails.count == 0 else 1
     global DEVICE
     if args.rehearse:
         # The steps below on the CPU, smaller: a test of this script where
         # there is no GPU, not a check of one.
         DEVICE = "cpu"
         steps = [("golden pairs", check_golden), ("generated pairs", lambda f: check_generated(f, 70)),
+                 ("640x480 pairs", lambda f: check_timed_frames(f, 2)),
                  ("sqrt patterns", lambda f: check_sqrt(f, "cpu", 1 << 22)),
                  ("divisions", lambda f: check_divisions(f, 1_000_000))]
     elif not torch.cuda.is_available():
@@ -352,7 +370,7 @@ def main() -> int:
     else:
         versions()
         steps = [("golden pairs", check_golden), ("generated pairs", check_generated),
-                 ("sqrt patterns", check_sqrt), ("divisions", check_divisions),
+                 ("640x480 pairs", check_timed_frames), ("sqrt patterns", check_sqrt), ("divisions", check_divisions),
                  ("memory, frames", check_memory)]
     fails = Failures()
     started = time.perf_counter()
@@ -362,7 +380,9 @@ def main() -> int:
         print(f"{name}: {n}, {'equal' if fails.count == before else 'DIFFERENT'} "
               f"({time.perf_counter() - started:.0f} s)", flush=True)
     if not args.rehearse:
-        timings("cuda")
+        before = fails.count
+        timings("cuda", fails)
+        print(f"timed batches: {'equal' if fails.count == before else 'DIFFERENT'}", flush=True)
     print(f"total {time.perf_counter() - started:.0f} s; "
           f"{'every value equal' if fails.count == 0 else f'{fails.count} differences'}")
     return 0 if fails.count == 0 else 1

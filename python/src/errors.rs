@@ -1,12 +1,13 @@
 //! Errors as Python sees them: the host's errors as `ValueError` (a value
-//! the computation refuses) or `OSError` and its subclasses (a file), and
+//! the computation refuses), `MemoryError` (memory the system does not
+//! give) or `OSError` and its subclasses (a file), and
 //! a panic, which must never reach Python as one, as `RuntimeError`.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use pyo3::PyErr;
 use pyo3::exceptions::{
-    PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
+    PyFileNotFoundError, PyMemoryError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
 };
 use reynoldsflow_host::settings::Setting;
 use reynoldsflow_host::{HostError, panic_message};
@@ -53,6 +54,7 @@ pub fn host_error(e: HostError) -> PyErr {
             std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
             std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
             std::io::ErrorKind::InvalidData => PyValueError::new_err(message),
+            std::io::ErrorKind::OutOfMemory => PyMemoryError::new_err(message),
             _ => PyOSError::new_err(message),
         },
         _ => PyValueError::new_err(message),

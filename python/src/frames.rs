@@ -18,9 +18,9 @@ use numpy::{
 };
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use reynoldsflow_host::{Gray, HostError};
+use reynoldsflow_host::{Gray, HostError, limits};
 
-use crate::errors::value_error;
+use crate::errors::{host_error, value_error};
 
 /// A checked uint8 array of one frame `(H, W[, 1])` or a clip `(T, H, W[, 1])`.
 pub struct Frames<'py> {
@@ -114,6 +114,11 @@ impl<'py> Frames<'py> {
                 shape[dims]
             )));
         }
+        // The frame-size limit of every entry point (set_max_pixels), as
+        // the readers and Stream apply it: before anything of that size is
+        // allocated.
+        let (h, w) = (shape[dims - 2], shape[dims - 1]);
+        limits::check_frame_size(w, h).map_err(|too_large| host_error(too_large.about(name)))?;
         let array = array
             .cast::<PyArrayDyn<u8>>()?
             .try_readonly()
@@ -224,13 +229,19 @@ fn shape_text(shape: &[usize]) -> String {
     }
 }
 
-/// One frame's view (`(H, W)` or `(H, W, 1)`, any strides) as a [`Gray`].
+/// One frame's view (`(H, W)` or `(H, W, 1)`, any strides) as a [`Gray`];
+/// memory the system does not give is an error (`MemoryError`), not an
+/// abort.
 pub fn gray(view: ArrayViewD<'_, u8>) -> Result<Gray, HostError> {
     let (h, w) = (view.shape()[0], view.shape()[1]);
-    let pixels = match view.as_slice() {
-        Some(contiguous) => contiguous.to_vec(),
-        None => view.iter().copied().collect(),
-    };
+    let mut pixels = Vec::new();
+    pixels
+        .try_reserve_exact(view.len())
+        .map_err(|_| HostError::io("a frame's copy", std::io::ErrorKind::OutOfMemory.into()))?;
+    match view.as_slice() {
+        Some(contiguous) => pixels.extend_from_slice(contiguous),
+        None => pixels.extend(view.iter().copied()),
+    }
     Gray::new(w, h, pixels)
 }
 

@@ -298,6 +298,9 @@ fn represent_clip<'py>(
         )));
     }
     let (w, h) = plan.size.map_or((w, h), |size| size.of(w, h));
+    // The frames taken, resized, are held too: the same limit.
+    reynoldsflow_host::limits::check_frame_size(w, h)
+        .map_err(|too_large| host_error(too_large.about("resize")))?;
     let results = picked.len() - 1;
     let count = results + usize::from(keep_count);
     let mut output = Output::new(py, out, &layout.shape(Some(count), h, w))?;
@@ -452,6 +455,37 @@ impl Stream {
     }
 }
 
+/// `Stream`'s `width` or `height` (`name`): an integer (anything with
+/// `__index__`) of at least 1, or the `TypeError` / `ValueError` naming it.
+fn stream_side(value: &Bound<'_, PyAny>, name: &str) -> PyResult<usize> {
+    let type_name = || {
+        value
+            .get_type()
+            .name()
+            .map_or_else(|_| "?".to_owned(), |n| n.to_string())
+    };
+    let Ok(index) = value.call_method0("__index__") else {
+        return Err(PyTypeError::new_err(format!(
+            "Stream: {name}: {} {}; expected an integer number of pixels",
+            type_name(),
+            value
+                .repr()
+                .map_or_else(|_| "?".to_owned(), |r| r.to_string())
+        )));
+    };
+    if index.lt(1)? {
+        return Err(value_error(format!(
+            "Stream: {name} = {index}; expected at least 1 pixel"
+        )));
+    }
+    index.extract::<usize>().map_err(|_| {
+        value_error(format!(
+            "Stream: {name} = {index}; a side is at most {} pixels",
+            reynoldsflow_core::MAX_SIDE
+        ))
+    })
+}
+
 /// A frame as the pair stream takes it: no stamp, no label.
 fn stream_frame(gray: Gray) -> pair_stream::Frame<()> {
     pair_stream::Frame {
@@ -468,20 +502,16 @@ impl Stream {
     #[pyo3(signature = (width, height, **options))]
     fn new(
         py: Python<'_>,
-        width: usize,
-        height: usize,
+        width: &Bound<'_, PyAny>,
+        height: &Bound<'_, PyAny>,
         options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
+        let (width, height) = (stream_side(width, "width")?, stream_side(height, "height")?);
         let keys = [settings::IMAGE_KEYS, &["first_frame", "threads"]].concat();
         let mut kw = Kwargs::new(py, "Stream", options, &keys)?;
         let first_frame = kw.first_frame()?;
         let threads = kw.threads()?;
         let settings = CallSettings::parse(kw)?;
-        if width == 0 || height == 0 {
-            return Err(value_error(format!(
-                "Stream: {width}x{height}: width and height must be at least 1"
-            )));
-        }
         // Refused when made, not at the first push: a side the core cannot
         // hold, or more pixels than a frame may have.
         if width > reynoldsflow_core::MAX_SIDE || height > reynoldsflow_core::MAX_SIDE {
@@ -879,8 +909,10 @@ fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) 
 /// set_max_pixels(n)
 ///
 /// The most pixels (width x height) a frame of this process may have, at
-/// least 1 (``ValueError`` otherwise); default 8192 x 8192. Every reader
-/// (image files, Y4M, raw, video) and ``Stream`` refuse a larger frame
+/// least 1 (``ValueError`` otherwise); default 8192 x 8192. Every entry
+/// point (the readers of image files, Y4M, raw and video, ``represent``,
+/// ``fields``, ``motion_score``, ``represent_clip``, ``Stream``,
+/// ``represent_batch``) refuses a larger frame with the same ``ValueError``
 /// before allocating it, as the command line's ``--max-pixels``.
 #[pyfunction]
 fn set_max_pixels(n: i64) -> PyResult<()> {
@@ -892,6 +924,17 @@ fn set_max_pixels(n: i64) -> PyResult<()> {
     })?;
     reynoldsflow_host::limits::set_max_pixels(n);
     Ok(())
+}
+
+/// _check_frame_size(width, height, subject)
+///
+/// The ``ValueError`` every entry point gives for a frame of
+/// ``width x height`` over the ``set_max_pixels`` limit, about ``subject``
+/// (for the package's functions written in Python).
+#[pyfunction]
+fn _check_frame_size(width: usize, height: usize, subject: &str) -> PyResult<()> {
+    reynoldsflow_host::limits::check_frame_size(width, height)
+        .map_err(|too_large| host_error(too_large.about(subject)))
 }
 
 /// max_pixels() -> int
@@ -921,6 +964,22 @@ fn call_settings<'py>(
     CallSettings::parse(Kwargs::new(py, "settings", options, settings::IMAGE_KEYS)?)?.to_dict(py)
 }
 
+/// _settings(function, options) -> dict
+///
+/// ``settings(**options)``, its errors naming ``function`` as the caller
+/// (``"represent_batch() got an unexpected keyword argument ..."``): the
+/// one parsing of the computing keywords, for the package's functions
+/// written in Python.
+#[pyfunction]
+#[pyo3(signature = (function, options=None))]
+fn _settings<'py>(
+    py: Python<'py>,
+    function: &str,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    CallSettings::parse(Kwargs::new(py, function, options, settings::IMAGE_KEYS)?)?.to_dict(py)
+}
+
 #[pymodule]
 #[pyo3(name = "_native")]
 fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -934,6 +993,7 @@ fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
         )?,
     )?;
     m.add_function(wrap_pyfunction!(call_settings, m)?)?;
+    m.add_function(wrap_pyfunction!(_settings, m)?)?;
     m.add_function(wrap_pyfunction!(represent, m)?)?;
     m.add_function(wrap_pyfunction!(fields, m)?)?;
     m.add_function(wrap_pyfunction!(motion_score, m)?)?;
@@ -946,6 +1006,7 @@ fn reynoldsflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_flo, m)?)?;
     m.add_function(wrap_pyfunction!(set_max_pixels, m)?)?;
     m.add_function(wrap_pyfunction!(max_pixels, m)?)?;
+    m.add_function(wrap_pyfunction!(_check_frame_size, m)?)?;
     m.add_function(wrap_pyfunction!(write_flo, m)?)?;
     m.add_class::<Stream>()?;
     Ok(())

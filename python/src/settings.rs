@@ -59,7 +59,7 @@ pub const CONVERT_KEYS: &[&str] = &[
 /// A function's keyword arguments, taken one by one; any left over is a
 /// `TypeError`, as Python raises for an unknown keyword.
 pub struct Kwargs<'py> {
-    function: &'static str,
+    function: String,
     dict: Bound<'py, PyDict>,
 }
 
@@ -67,7 +67,7 @@ impl<'py> Kwargs<'py> {
     /// The keywords of `function`, which takes [`FIELD_KEYS`] and `own`.
     pub fn new(
         py: Python<'py>,
-        function: &'static str,
+        function: &str,
         dict: Option<&Bound<'py, PyDict>>,
         own: &[&str],
     ) -> PyResult<Self> {
@@ -83,7 +83,10 @@ impl<'py> Kwargs<'py> {
                 )));
             }
         }
-        Ok(Self { function, dict })
+        Ok(Self {
+            function: function.to_owned(),
+            dict,
+        })
     }
 
     /// The value of `key` if given (and not None).
@@ -103,7 +106,7 @@ impl<'py> Kwargs<'py> {
     where
         T: for<'a> FromPyObject<'a, 'py>,
     {
-        let function = self.function;
+        let function = self.function.clone();
         self.take(key)?
             .map(|v| {
                 v.extract::<T>().map_err(|_| {
@@ -126,7 +129,7 @@ impl<'py> Kwargs<'py> {
     /// `resize`, `short_side`, `step`, `fps`: which frames make pairs, at
     /// what size.
     pub fn frame_plan(&mut self) -> PyResult<FramePlan> {
-        let function = self.function;
+        let function = self.function.clone();
         let bad = |key: &str, e: String| value_error(format!("{function}(): {key}: {e}"));
         let resize = match self.take("resize")? {
             None => None,
@@ -195,7 +198,7 @@ impl<'py> Kwargs<'py> {
 
     /// A frame rate keyword (`source_fps`).
     pub fn rate(&mut self, key: &str) -> PyResult<Option<Rate>> {
-        let function = self.function;
+        let function = self.function.clone();
         self.take(key)?
             .map(|v| rate(&v).map_err(|e| value_error(format!("{function}(): {key}: {e}"))))
             .transpose()

@@ -188,8 +188,9 @@ def test_batch_of_one_and_chunks_give_the_same_bytes():
     frames = clip(9, 21, 14)
     t = torch.from_numpy(frames)
     whole, fields = represent_batch(t[:-1], t[1:], fields=True)
-    assert _torch_batch.chunk_pairs(14, 21, 1) == 1
-    chunked, chunk_fields = represent_batch(t[:-1], t[1:], fields=True, memory_budget=1)
+    one_pair = _torch_batch.pair_bytes(14, 21)
+    assert _torch_batch.chunk_pairs(14, 21, 2 * one_pair - 1) == 1
+    chunked, chunk_fields = represent_batch(t[:-1], t[1:], fields=True, memory_budget=one_pair)
     assert torch.equal(whole, chunked)
     for k in fields:
         assert torch.equal(fields[k].view(torch.int32), chunk_fields[k].view(torch.int32)), k
@@ -235,7 +236,7 @@ def test_bad_input_names_the_argument():
         ({"intensity_scale": 1e-12}, ValueError, "intensity_scale"),
         ({"scale": "fixed:1"}, ValueError, "scale"),
         ({"scale": (70000, 1)}, ValueError, "scale"),
-        ({"layout": "hwc"}, TypeError, "layout"),
+        ({"layout": "rgb"}, ValueError, "layout"),
         ({"memory_budget": 0}, ValueError, "memory_budget"),
     ]
     for kwargs, error, name in settings:
@@ -299,7 +300,8 @@ def test_gpu_check_rehearsed_on_the_cpu_finds_every_value_equal():
     CUDA path's code is exercised where there is no GPU."""
     res = run_gpu_check("--rehearse")
     assert res.returncode == 0, res.stdout + res.stderr
-    for step in ["golden pairs: 11, equal", "generated pairs: 70, equal", "divisions: 1000000, equal",
+    for step in ["golden pairs: 11, equal", "generated pairs: 70, equal", "640x480 pairs: 2, equal",
+                 "divisions: 1000000, equal",
                  "sqrt patterns: 4194304, equal", "every value equal"]:
         assert step in res.stdout, res.stdout
 

@@ -4,16 +4,17 @@ numbers, derived exactly as the core derives them (``core/src/params.rs``,
 ``reynoldsflow._torch_core`` computes with the very integers and ``float32``
 values the core computes with.
 
-The settings are first checked by the core itself (a 1x1 ``represent``):
-whatever it refuses raises its own ``TypeError``/``ValueError`` here, and
-what it accepts has the core's meaning.
+The settings are parsed and checked by the one parser of every entry point
+(``reynoldsflow.settings``, what ``represent`` runs): whatever it refuses
+raises its own ``TypeError``/``ValueError`` here, and what it accepts has
+the core's meaning.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Optional, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 import numpy
 
@@ -22,8 +23,9 @@ from . import _native
 # The worst |X·Vx + Y·Vy| + |4·p0·Q| (params.rs DN_BOUND_WITHOUT_KAPPA).
 _DN_BOUND_WITHOUT_KAPPA = 1020 * (2 * 6_854_400 + 16_144_560)
 
-# The keywords of ``reynoldsflow.represent`` that set the computation.
-SETTING_KEYS = ("engine", "scale", "intensity_scale", "lam", "tile", "variant", "hsv_max")
+# The keywords of ``reynoldsflow.represent`` that set the computation (all
+# its settings but the layout of the images).
+SETTING_KEYS = tuple(key for key in _native.DEFAULTS if key != "layout")
 
 
 @dataclass(frozen=True)
@@ -55,71 +57,37 @@ def _f32(x: Fraction) -> float:
     return float(numpy.float32(float(x)))
 
 
-def _ratio_of_float(x: float) -> Tuple[int, int]:
-    """``settings.rs::ratio_of_float``: the first continued-fraction
-    convergent ``h / k`` (both below 2^32) whose ``f64`` quotient is ``x``.
-    Only called on floats the core has accepted, which have one."""
-    h0, h1, k0, k1 = 0, 1, 1, 0
-    r = x
-    for _ in range(64):
-        a = int(r // 1)
-        h2, k2 = a * h1 + h0, a * k1 + k0
-        if float(Fraction(h2, k2)) == x:
-            return h2, k2
-        h0, h1, k0, k1 = h1, h2, k1, k2
-        r = float(1 / Fraction(r - a))
-    raise ValueError(f"intensity_scale: {x} is not a ratio of 32-bit integers")
-
-
-def _intensity_scale(value: Any) -> Fraction:
-    """The exact ``s`` of an ``intensity_scale`` the core accepted."""
-    if value is None:
-        return Fraction(1, 255)
-    if isinstance(value, str):
-        num, _, den = value.partition("/")
-        return Fraction(num.strip()) / (Fraction(den.strip()) if den else 1)
-    if isinstance(value, float):
-        return Fraction(*_ratio_of_float(value))
-    if isinstance(value, tuple):
-        return Fraction(int(value[0]), int(value[1]))
-    return Fraction(int(value.numerator), int(value.denominator))
-
-
 def _gain(k: float) -> float:
     """A fixed gain as the core's Q16.16 (nearest, ties to even), then
     ``f32`` (``ByteScale::fixed``)."""
     return _f32(Fraction(round(Fraction(k) * 65536), 65536))
 
 
-def _gains(scale: Any) -> Optional[Tuple[float, float]]:
-    if scale is None or scale == "minmax":
+def _gains(scale: str) -> Optional[Tuple[float, float]]:
+    """The gains of a checked ``scale`` (``"minmax"`` or ``"fixed:KD,KC"``,
+    each gain the shortest decimal of its ``f64``)."""
+    if scale == "minmax":
         return None
-    if isinstance(scale, str):
-        k_d, k_c = scale[len("fixed:"):].split(",")
-        return _gain(float(k_d.strip())), _gain(float(k_c.strip()))
-    k_d, k_c = scale
+    k_d, k_c = scale[len("fixed:"):].split(",")
     return _gain(float(k_d)), _gain(float(k_c))
 
 
-def core_constants(
-    *,
-    engine: str = "fixed",
-    scale: Any = "minmax",
-    intensity_scale: Any = None,
-    lam: float = 1e-4,
-    tile: Optional[Tuple[int, int]] = None,
-    variant: str = "dc",
-    hsv_max: Optional[float] = None,
-) -> CoreConstants:
-    """The constants of ``reynoldsflow.represent``'s settings, checked by
-    the core first. ``tile`` is checked and has no effect (every tiling
-    gives the same bytes). The float64 engine and the ``hsv`` variant are
-    refused with a ``ValueError``."""
-    one = numpy.zeros((1, 1), numpy.uint8)
-    _native.represent(
-        one, one, engine=engine, scale=scale, intensity_scale=intensity_scale,
-        lam=lam, tile=tile, variant=variant, hsv_max=hsv_max,
-    )
+def checked_settings(function: str, options: Dict[str, Any]) -> Dict[str, Any]:
+    """``options`` (``reynoldsflow.represent``'s keywords, ``None`` meaning
+    the default) parsed and checked by the one parser of every entry point,
+    the one ``represent`` runs (``reynoldsflow.settings``), its errors
+    naming ``function``: every setting in its canonical form
+    (``intensity_scale`` as ``"num/den"``, ``scale`` as ``"minmax"`` or
+    ``"fixed:KD,KC"``, ...)."""
+    return _native._settings(function, options)
+
+
+def core_constants(settings: Dict[str, Any]) -> CoreConstants:
+    """The constants of ``settings`` (as :func:`checked_settings` gives
+    them). ``tile`` has no effect (every tiling gives the same bytes). The
+    float64 engine and the ``hsv`` variant are refused with a
+    ``ValueError``."""
+    engine, variant = settings["engine"], settings["variant"]
     if engine != "fixed":
         raise ValueError(
             f"engine = {engine!r}: only the fixed-point core ('fixed') is exact in tensor "
@@ -130,10 +98,10 @@ def core_constants(
             f"variant = {variant!r}: represent_batch makes 'dc', 'dc0' and 'cd'; "
             "the colour wheel ('hsv') is reynoldsflow.represent's"
         )
-    s = _intensity_scale(intensity_scale)
+    s = Fraction(settings["intensity_scale"])
     num, den = s.numerator, s.denominator
     kappa = (2 * 6144 * den + num) // (2 * num)
-    lambda_bits = round(Fraction(float(lam)) * 2**32)
+    lambda_bits = round(Fraction(float(settings["lam"])) * 2**32)
     lambda_den = (num * num) << 16
     lambda4 = (lambda_bits * den * den + lambda_den // 2) // lambda_den
     shift = max(0, (255 * kappa + _DN_BOUND_WITHOUT_KAPPA).bit_length() - 27)
@@ -145,6 +113,6 @@ def core_constants(
         v_c=_f32(Fraction(num, 768 * den)),
         v_d=_f32(Fraction(num << (shift + 20), 192 * den)),
         det_floor=float(l4 * l4),
-        gains=_gains(scale),
+        gains=_gains(settings["scale"]),
         variant=variant,
     )

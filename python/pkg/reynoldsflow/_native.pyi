@@ -3,7 +3,7 @@ docstring (`reynoldsflow/__init__.py`) documents the options they share."""
 
 from os import PathLike
 from fractions import Fraction
-from typing import Iterator, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 from typing_extensions import NotRequired
 
@@ -320,11 +320,21 @@ def read_frames(
 
 def set_max_pixels(n: int) -> None:
     """The most pixels (width x height) a frame of this process may have,
-    at least 1 (default 8192 x 8192): readers and ``Stream`` refuse a larger
-    frame before allocating it, as the command line's ``--max-pixels``."""
+    at least 1 (default 8192 x 8192): every entry point (the readers,
+    ``represent``, ``fields``, ``motion_score``, ``represent_clip``,
+    ``Stream``, ``represent_batch``) refuses a larger frame with the same
+    ``ValueError`` before allocating it, as the command line's
+    ``--max-pixels``."""
 
 def max_pixels() -> int:
     """The limit ``set_max_pixels`` sets."""
+
+def _check_frame_size(width: int, height: int, subject: str) -> None:
+    """The ``ValueError`` of a frame over the ``set_max_pixels`` limit,
+    about ``subject`` (for the package's functions written in Python)."""
+
+def _settings(function: str, options: Optional[Dict[str, Any]] = None) -> Settings:
+    """``settings(**options)``, its errors naming ``function``."""
 
 def read_flo(path: Path) -> npt.NDArray[np.float32]:
     """A Middlebury .flo file as an (H, W, 2) float32 array, last axis (u, v)."""

@@ -35,7 +35,8 @@ except ImportError as e:  # pragma: no cover - exercised without torch only
 import numpy
 
 import reynoldsflow as _rf
-from reynoldsflow._core_params import SETTING_KEYS as _SETTING_KEYS, core_constants as _core_constants
+from reynoldsflow._core_params import SETTING_KEYS as _SETTING_KEYS, checked_settings as _checked_settings
+from reynoldsflow._core_params import core_constants as _core_constants
 from reynoldsflow._torch_batch import gray_frames, represent_batch
 
 __all__ = ["ReynoldsFlow", "ReynoldsFlowDataset", "collate", "represent_batch", "shard_of_this_process"]
@@ -103,7 +104,8 @@ class ReynoldsFlow:
                     f"ReynoldsFlow(device=...) takes represent_batch's settings and keep_count; "
                     f"not {', '.join(other or ['threads'])}"
                 )
-            _core_constants(**self._settings())  # a bad setting raises here
+            # A bad setting raises here.
+            _core_constants(_checked_settings("ReynoldsFlow", self._settings()))
 
     def _settings(self) -> Dict[str, Any]:
         return {k: v for k, v in self.options.items() if k != "keep_count"}
