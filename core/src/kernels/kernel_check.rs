@@ -2,8 +2,8 @@
 //! on rows at the bounds of their inputs and random ones, every length
 //! from 0 to [`LEN`] (both parities of the two-column loops, every position
 //! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
-//! firmware runs on the emulated M4 and M7, and aarch64's NEON sums and
-//! tail (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
+//! tail and bytes (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
 //! (`scripts/embedded-check`). Targets without such loops pass trivially.
 //! Not part of the stable surface.
 
@@ -329,17 +329,21 @@ mod m4 {
 /// each output row's vertical `G`, solve, magnitudes, extremes and fields,
 /// for outputs of every length from 0 to `LEN` (every position of a
 /// partial four-lane block) and every ring slot of an output row's first
-/// sums row.
+/// sums row; and its bytes against the portable pixels', rows of every
+/// length from 0 to `LEN` (two sixteen-pixel steps and every remainder).
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 mod neon {
     use super::{LEN, Values, tail_params};
+    use crate::ByteScale;
     use crate::kernels::neon::Neon;
     use crate::kernels::{KernelSet, OutputRow, Portable, SumRings};
     use crate::ring::take_rows;
     use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
+    use crate::sink::portable_rgb_tail;
     use crate::stages::{DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS};
     use crate::tail::{TailConstants, TailOut};
     use crate::{Config, ExtremesSink};
+    use fixed::types::U16F16;
 
     /// The widest window checked.
     const COLS: usize = LEN + 2 * HALO;
@@ -363,6 +367,63 @@ mod neon {
                     rows += sums_and_tail(&mut values, &k, len, fields)?;
                 }
             }
+            rows += bytes(&mut values, len)?;
+        }
+        Ok(rows)
+    }
+
+    /// The representation's bytes (`KernelSet::rgb_row`) against the
+    /// portable pixels, on magnitudes of every size and kind (zero, tiny,
+    /// past the top byte, below the map's minimum, at a byte's half, and
+    /// the NaN, infinity and signed zero no engine's magnitude is, which
+    /// the saturating conversion maps all the same), under fixed gains and
+    /// per-frame min–max maps, one of them flat.
+    fn bytes(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        const ODD: [f32; 8] = [
+            f32::NAN,
+            f32::INFINITY,
+            -f32::INFINITY,
+            -0.0,
+            0.0,
+            0.5,
+            31.9375,
+            1e30,
+        ];
+        let mut row = || -> [f32; LEN] {
+            core::array::from_fn(|_| {
+                let v = values.next();
+                match (v >> 40) % 8 {
+                    0 => ODD[(v >> 44) as usize % ODD.len()],
+                    k => {
+                        f32::from_bits((v as u32 >> 9) | 0x3000_0000)
+                            * [0.0, 1.0, 64.0, 1e6, 1e-3, 8.0, 255.0][k as usize - 1]
+                    }
+                }
+            })
+        };
+        let (m_d, m_c) = (row(), row());
+        let luma: [u8; LEN] = core::array::from_fn(|_| values.next() as u8);
+        let mut rows = 0;
+        for [scale_d, scale_c] in [
+            [
+                ByteScale::fixed(U16F16::from_num(8)),
+                ByteScale::fixed(U16F16::from_num(32)),
+            ],
+            [
+                ByteScale::min_max(0.001, 3.5),
+                ByteScale::min_max(0.0, 1e-3),
+            ],
+            [ByteScale::min_max(2.0, 2.0), ByteScale::min_max(-1.0, 1e7)],
+        ] {
+            let (mut want, mut got) = ([[0u8; 3]; LEN], [[0u8; 3]; LEN]);
+            let (m_d, m_c, luma) = (&m_d[..len], &m_c[..len], &luma[..len]);
+            let scales = [&scale_d, &scale_c];
+            portable_rgb_tail(m_d, m_c, luma, scales, &mut want[..len]);
+            Neon::rgb_row(m_d, m_c, luma, scales, &mut got[..len]);
+            if want != got {
+                return Err("neon: rgb_row");
+            }
+            rows += 1;
         }
         Ok(rows)
     }

@@ -14,9 +14,9 @@
 //!   (`Job::with_avx2`), held equal to the
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
 //!   in a layout of its own, which it names as its [`KernelSet::Sums`];
-//! - `neon`: the same layout and tail in NEON lanes for aarch64, fixed at
-//!   compile time, held equal to the portable sums and tail by
-//!   `kernel_check` under `qemu-aarch64`.
+//! - `neon`: the same layout and tail, and the bytes, in NEON lanes for
+//!   aarch64, fixed at compile time, held equal to the portable sums, tail
+//!   and bytes by `kernel_check` under `qemu-aarch64`.
 //!
 //! [`fpu`] holds the two per-target instructions the portable code itself
 //! calls (the `f32` square root, the byte of a clamped value).
@@ -105,6 +105,21 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
         tail::tail_row(k, rows, out);
+    }
+
+    /// The representation's bytes of a row segment (`sink::rgb_row`):
+    /// [`sink::batched_rgb_row`](crate::sink::batched_rgb_row), whose
+    /// remainder (all of it on the scalar boards) goes to
+    /// [`KernelSet::rgb_pixels`].
+    #[inline(always)]
+    fn rgb_row(
+        m_d: &[f32],
+        m_c: &[f32],
+        luma: &[u8],
+        scales: [&ByteScale; 2],
+        out: &mut [[u8; 3]],
+    ) {
+        crate::sink::batched_rgb_row::<Self>(m_d, m_c, luma, scales, out);
     }
 
     /// The representation's bytes of a row segment one pixel at a time

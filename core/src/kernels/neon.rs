@@ -1,4 +1,4 @@
-//! The structure sums and the tail in NEON lanes, through intrinsics, for
+//! The structure sums, the tail and the bytes in NEON lanes, through intrinsics, for
 //! aarch64 (companion boards: Raspberry Pi 4/5, Jetson Orin's CPU). NEON is
 //! part of every aarch64 target this builds for (`target_feature = "neon"`),
 //! so the set is fixed at compile time: the firmware's and the host's
@@ -16,6 +16,11 @@
 //! through 25 pointers and took the sums to memory and back between the
 //! vertical `G` and the tail.
 //!
+//! The representation's bytes take sixteen pixels a step: both
+//! magnitudes' bytes in lanes and `fⁿ`'s, interleaved by one `ST3`, where
+//! the portable batches went through the stack and an interleaving loop
+//! the compiler kept scalar.
+//!
 //! Every operation is the portable one, in the same order, so the bytes
 //! are the same (`kernel_check`, run under `qemu-aarch64`): exact integer
 //! sums, and the `f32` steps of `stages` and `tail` each rounded once. The
@@ -28,15 +33,16 @@
 //!
 //! `unsafe` here: the calls of the `#[target_feature(enable = "neon")]`
 //! functions, which the module's `cfg` (NEON in the build's features)
-//! makes sound, and the loads and stores of four lanes, each within a row
-//! whose length is checked once a row.
+//! makes sound, and the loads and stores of four (bytes: sixteen) lanes,
+//! each within a row whose length is checked once a row.
 #![allow(unsafe_code)]
 
 use core::arch::aarch64::{
-    float32x4_t, int32x4_t, vaddq_f32, vaddq_s32, vcvtq_f32_s32, vdivq_f32, vdupq_n_f32,
-    vdupq_n_s32, vdupq_n_u32, vfmaq_f32, vld1q_f32, vld1q_s32, vmaxq_f32, vmaxq_u32, vmaxvq_u32,
-    vminq_u32, vminvq_u32, vmulq_f32, vreinterpretq_u32_f32, vshlq_n_s32, vsqrtq_f32, vst1q_f32,
-    vst1q_s32, vsubq_f32,
+    float32x4_t, int32x4_t, uint8x16_t, uint8x16x3_t, vaddq_f32, vaddq_s32, vcvtq_f32_s32,
+    vcvtq_u32_f32, vdivq_f32, vdupq_n_f32, vdupq_n_s32, vdupq_n_u32, vfmaq_f32, vld1q_f32,
+    vld1q_s32, vld1q_u8, vmaxq_f32, vmaxq_u32, vmaxvq_u32, vminq_u32, vminvq_u32, vmulq_f32,
+    vqmovn_high_u16, vqmovn_high_u32, vqmovn_u16, vqmovn_u32, vreinterpretq_u32_f32, vshlq_n_s32,
+    vsqrtq_f32, vst1q_f32, vst1q_s32, vst3q_u8, vsubq_f32,
 };
 
 use super::{KernelSet, OutputRow, Products, SumRings};
@@ -44,7 +50,7 @@ use crate::ring::take;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{FLOAT_CHANNELS, INT_CHANNELS, Sample};
 use crate::tail::{TailConstants, TailOut};
-use crate::{Extremes, ExtremesSink};
+use crate::{ByteScale, Extremes, ExtremesSink};
 
 /// The NEON set: the portable row kernels, the structure sums in blocks
 /// ([`BlockedSums`]) and the tail in lanes.
@@ -53,6 +59,74 @@ pub(crate) struct Neon;
 
 impl KernelSet for Neon {
     type Sums<'m> = BlockedSums<'m>;
+
+    /// [`RGB_STEP`] pixels a step in lanes ([`rgb_steps`]), the rest one
+    /// at a time.
+    #[inline(always)]
+    fn rgb_row(
+        m_d: &[f32],
+        m_c: &[f32],
+        luma: &[u8],
+        scales: [&ByteScale; 2],
+        out: &mut [[u8; 3]],
+    ) {
+        let n = out.len().min(m_d.len()).min(m_c.len()).min(luma.len());
+        let whole = n - n % RGB_STEP;
+        let (Some((m_d, d_rest)), Some((m_c, c_rest)), Some((luma, l_rest)), Some((out, o_rest))) = (
+            m_d.split_at_checked(whole),
+            m_c.split_at_checked(whole),
+            luma.split_at_checked(whole),
+            out.split_at_mut_checked(whole),
+        ) else {
+            return;
+        };
+        // SAFETY: NEON is in the build's features (the module's `cfg`).
+        unsafe { rgb_steps([m_d, m_c], luma, scales.map(ByteScale::parts), out) };
+        Self::rgb_pixels(d_rest, c_rest, l_rest, scales, o_rest);
+    }
+}
+
+/// Pixels a step of [`rgb_steps`]: sixteen bytes a channel, one `ST3`.
+const RGB_STEP: usize = 16;
+
+/// `ByteScale::byte` of sixteen magnitudes from `m`: `(m − offset) · gain
+/// + ½`, each step rounded once as the portable one (no fused step), then
+/// `FCVTZU` (toward zero, saturating to `u32`, NaN to 0) and two
+/// saturating narrowings: Rust's saturating `t as u8`, lane by lane.
+///
+/// # Safety
+/// `m` points to sixteen readable values.
+#[inline]
+#[target_feature(enable = "neon")]
+unsafe fn bytes_at(m: *const f32, [offset, gain]: [float32x4_t; 2]) -> uint8x16_t {
+    let word = |k: usize| {
+        // SAFETY: the caller's (`k < 4`).
+        let m = unsafe { vld1q_f32(m.add(4 * k)) };
+        let t = vaddq_f32(vmulq_f32(vsubq_f32(m, offset), gain), vdupq_n_f32(0.5));
+        vcvtq_u32_f32(t)
+    };
+    let low = vqmovn_high_u32(vqmovn_u32(word(0)), word(1));
+    let high = vqmovn_high_u32(vqmovn_u32(word(2)), word(3));
+    vqmovn_high_u16(vqmovn_u16(low), high)
+}
+
+/// The bytes of `out.len() / RGB_STEP` steps of [`RGB_STEP`] pixels: each
+/// magnitude's bytes ([`bytes_at`]) and `fⁿ`, interleaved by one `ST3`.
+/// `scales`: `ByteScale::parts` of `|v_d|`'s and `|v_c|`'s.
+#[target_feature(enable = "neon")]
+fn rgb_steps([m_d, m_c]: [&[f32]; 2], luma: &[u8], scales: [[f32; 2]; 2], out: &mut [[u8; 3]]) {
+    let steps = out.len().min(m_d.len()).min(m_c.len()).min(luma.len()) / RGB_STEP;
+    let [d, c] = scales.map(|[offset, gain]| [vdupq_n_f32(offset), vdupq_n_f32(gain)]);
+    for s in 0..steps {
+        let i = s * RGB_STEP;
+        // SAFETY: `i + RGB_STEP` is within every row (`steps`).
+        unsafe {
+            let r = bytes_at(m_d.as_ptr().add(i), d);
+            let g = bytes_at(m_c.as_ptr().add(i), c);
+            let b = vld1q_u8(luma.as_ptr().add(i));
+            vst3q_u8(out.as_mut_ptr().add(i).cast::<u8>(), uint8x16x3_t(r, g, b));
+        }
+    }
 }
 
 /// The sums' rings in blocks (module doc): the integer channels' ring and
