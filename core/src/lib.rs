@@ -70,7 +70,10 @@
 // AVX2 at run time in intrinsics (the `#[target_feature]` calls, which its
 // token makes sound, and loads and stores of eight lanes within rows
 // checked once a row), held equal to the portable pass by
-// `tests/tests/simd.rs`.
+// `tests/tests/simd.rs`; in `neon.rs`, the same on aarch64 in NEON lanes
+// (loads and stores of four lanes within rows checked once a row), held
+// equal to the portable sums and tail by `kernel_check` under
+// `qemu-aarch64`.
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 

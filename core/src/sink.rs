@@ -116,11 +116,27 @@ fn rgb_of(m_d: f32, m_c: f32, luma: u8, [scale_d, scale_c]: [&ByteScale; 2]) -> 
 }
 
 /// [`rgb`] of every pixel of a row segment, into `out` (as many as the
-/// shorter has). Where rows take vector lanes, in batches of
-/// [`RGB_BATCH`] ([`rgb_batch`]); one pixel at a time elsewhere.
+/// shorter has), in the target's kernel set: where rows take vector lanes
+/// in batches of [`RGB_BATCH`] ([`rgb_batch`]), on aarch64 sixteen pixels
+/// a step in NEON lanes (`kernels/neon.rs`), one pixel at a time elsewhere.
 #[inline(always)]
 pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out: &mut [[u8; 3]]) {
-    let (mut m_d, mut m_c, mut luma, mut out) = (pixels.m_d, pixels.m_c, pixels.luma, out);
+    let scales = [scale_d, scale_c];
+    Native::rgb_row(pixels.m_d, pixels.m_c, pixels.luma, scales, out);
+}
+
+/// [`rgb_row`] as the portable kernels write it (`KernelSet::rgb_row`'s
+/// default): in batches of [`RGB_BATCH`] where rows take vector lanes,
+/// the rest in the set's `rgb_pixels`.
+#[inline(always)]
+pub(crate) fn batched_rgb_row<K: KernelSet>(
+    m_d: &[f32],
+    m_c: &[f32],
+    luma: &[u8],
+    [scale_d, scale_c]: [&ByteScale; 2],
+    out: &mut [[u8; 3]],
+) {
+    let (mut m_d, mut m_c, mut luma, mut out) = (m_d, m_c, luma, out);
     if crate::VECTOR_ROWS {
         let (md, md_rest) = m_d.as_chunks::<RGB_BATCH>();
         let (mc, mc_rest) = m_c.as_chunks::<RGB_BATCH>();
@@ -131,8 +147,8 @@ pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out
         }
         (m_d, m_c, luma, out) = (md_rest, mc_rest, l_rest, o_rest);
     }
-    // The rest one pixel at a time, in the target's kernel.
-    Native::rgb_pixels(m_d, m_c, luma, [scale_d, scale_c], out);
+    // The rest one pixel at a time, in the set's kernel.
+    K::rgb_pixels(m_d, m_c, luma, [scale_d, scale_c], out);
 }
 
 /// [`rgb_row`]'s pixels one at a time (all of them on the scalar boards,

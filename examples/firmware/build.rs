@@ -49,8 +49,18 @@ fn board(target: &str) -> Option<Board> {
             cols: microbit_cols,
             link_args: CORTEX_M_LINK,
         },
-        // `-bios none`: QEMU starts at the ELF's entry in DRAM.
-        "riscv32imac-unknown-none-elf" => Board {
+        // The Cortex-M33 (with DSP and FPU): the AN505 boots in the Secure
+        // state, its vector table at the secure alias of SSRAM1
+        // (0x1000_0000), and its data in the secure alias of SSRAM2 and 3.
+        "thumbv8m.main-none-eabihf" => Board {
+            name: "mps2-an505",
+            memory_x: "MEMORY {\n  FLASH : ORIGIN = 0x10000000, LENGTH = 4M\n  RAM : ORIGIN = 0x38000000, LENGTH = 4M\n}\n",
+            cols: one_strip,
+            link_args: CORTEX_M_LINK,
+        },
+        // `-bios none`: QEMU starts at the ELF's entry in DRAM (RV32 with
+        // and without the F extension alike).
+        "riscv32imac-unknown-none-elf" | "riscv32imafc-unknown-none-elf" => Board {
             name: "virt",
             memory_x: "MEMORY {\n  RAM : ORIGIN = 0x80000000, LENGTH = 16M\n}\n\
                 REGION_ALIAS(\"REGION_TEXT\", RAM);\nREGION_ALIAS(\"REGION_RODATA\", RAM);\n\

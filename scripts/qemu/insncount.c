@@ -7,7 +7,11 @@
  * (callees included), summed over all such windows.
  * With profile=FILE, also writes "pc count" (hex, decimal) for every executed
  * instruction address, for per-function and per-stage breakdowns.
- * Usage: -plugin ./libinsncount.so[,lo=0x..,hi=0x..][,start=0x..,stop=0x..][,out=file][,profile=file]
+ * With wprofile=FILE, writes "pc count taken" for every address executed
+ * inside the start/stop windows: executions, and how many of them left
+ * the instruction to anywhere but the next address (taken branches), for
+ * the cycle model (scripts/qemu/cycles.py).
+ * Usage: -plugin ./libinsncount.so[,lo=0x..,hi=0x..][,start=0x..,stop=0x..][,out=file][,profile=file][,wprofile=file]
  * Own declarations of the handful of API entry points used (C ABI). */
 #include <stdint.h>
 #include <stdbool.h>
@@ -56,6 +60,7 @@ void qemu_plugin_register_vcpu_insn_exec_inline(struct qemu_plugin_insn *, enum 
 size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *);
 struct qemu_plugin_insn *qemu_plugin_tb_get_insn(const struct qemu_plugin_tb *, size_t);
 uint64_t qemu_plugin_insn_vaddr(const struct qemu_plugin_insn *);
+size_t qemu_plugin_insn_size(const struct qemu_plugin_insn *);
 void qemu_plugin_register_atexit_cb(qemu_plugin_id_t, udata_cb_t, void *);
 
 EXPORT int qemu_plugin_version = QEMU_PLUGIN_API;
@@ -81,6 +86,26 @@ static uint64_t *prof_counter(uint64_t pc)
 }
 static void prof_exec(unsigned int vcpu, void *counter) { ++*(uint64_t *)counter; }
 
+/* Window profile: per instruction its address, size, executions in a window
+ * and taken exits; the previous instruction executed is the one whose exit
+ * the next execution's address reveals. Single vCPU (the boards here). */
+#define WPROF_MAX (1u << 18)
+static struct wprof { uint64_t pc, size, count, taken; } *wprof;
+static uint64_t wprof_used;
+static struct wprof *wprof_last;
+static const char *wprofpath;
+static void wprof_exec(unsigned int vcpu, void *u)
+{
+    struct wprof *w = u;
+    if (wprof_last && wprof_last->pc + wprof_last->size != w->pc)
+        wprof_last->taken++;
+    wprof_last = NULL;
+    if (!in_win)
+        return;
+    w->count++;
+    wprof_last = w;
+}
+
 static void tb_trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
 {
     size_t n = qemu_plugin_tb_n_insns(tb);
@@ -104,6 +129,14 @@ static void tb_trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
         }
         if (hi > lo && pc >= lo && pc < hi)
             INLINE_ADD(insn, sizeof(uint64_t));
+        /* after the markers' callbacks: the start marker's first instruction
+         * counts, the stop marker's does not (as the window's count) */
+        if (wprof && wprof_used < WPROF_MAX) {
+            struct wprof *w = &wprof[wprof_used++];
+            w->pc = pc;
+            w->size = qemu_plugin_insn_size(insn);
+            qemu_plugin_register_vcpu_insn_exec_cb(insn, wprof_exec, QEMU_PLUGIN_CB_NO_REGS, w);
+        }
     }
 }
 
@@ -126,6 +159,15 @@ static void at_exit(qemu_plugin_id_t id, void *p)
                         (unsigned long long)prof[i].count);
         fclose(f);
     }
+    /* An address translated more than once (TBs retranslated) has several
+     * entries: the reader sums them. */
+    if (wprof && (f = fopen(wprofpath, "w"))) {
+        for (uint64_t i = 0; i < wprof_used; i++)
+            if (wprof[i].count)
+                fprintf(f, "%llx %llu %llu\n", (unsigned long long)wprof[i].pc,
+                        (unsigned long long)wprof[i].count, (unsigned long long)wprof[i].taken);
+        fclose(f);
+    }
 }
 
 EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int argc, char **argv)
@@ -138,6 +180,11 @@ EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int
             profpath = argv[i] + 8;
             prof = calloc(PROF_SLOTS, sizeof *prof);
             if (!prof) return -1;
+        }
+        else if (!strncmp(argv[i], "wprofile=", 9)) {
+            wprofpath = argv[i] + 9;
+            wprof = calloc(WPROF_MAX, sizeof *wprof);
+            if (!wprof) return -1;
         }
         else if (!strncmp(argv[i], "start=", 6)) start_pc = strtoull(argv[i] + 6, NULL, 0) & ~1ULL;
         else if (!strncmp(argv[i], "stop=", 5)) stop_pc = strtoull(argv[i] + 5, NULL, 0) & ~1ULL;

@@ -7,7 +7,9 @@
 #   bench_start/bench_stop symbols (printed to stderr as "insncount: ... window=N").
 #   The plugin is QEMU_INSNS_PLUGIN, default target/qemu/libinsncount.so at
 #   the repository root (scripts/embedded-check builds it with build-plugin.sh).
-#   QEMU_INSNS_PROFILE=FILE also writes per-instruction counts there.
+#   QEMU_INSNS_PROFILE=FILE also writes per-instruction counts there;
+#   QEMU_INSNS_WPROFILE=FILE the window's counts and taken exits
+#   (scripts/qemu/cycles.py).
 set -euo pipefail
 qemu=()
 while [ "$1" != "--" ]; do qemu+=("$1"); shift; done
@@ -17,7 +19,7 @@ qemu+=(-nographic -monitor none -serial none -semihosting-config enable=on,targe
 if [ -n "${QEMU_INSNS:-}" ]; then
   plugin=${QEMU_INSNS_PLUGIN:-$(dirname "$0")/../../target/qemu/libinsncount.so}
   sym() { readelf -sW "$elf" | awk -v n="$1" '$8==n && !f {print "0x"$2; f=1}'; }
-  qemu+=(-icount shift=0 -plugin "$plugin,start=$(sym bench_start),stop=$(sym bench_stop)${QEMU_INSNS_PROFILE:+,profile=$QEMU_INSNS_PROFILE}")
+  qemu+=(-icount shift=0 -plugin "$plugin,start=$(sym bench_start),stop=$(sym bench_stop)${QEMU_INSNS_PROFILE:+,profile=$QEMU_INSNS_PROFILE}${QEMU_INSNS_WPROFILE:+,wprofile=$QEMU_INSNS_WPROFILE}")
 fi
 if readelf -SW "$elf" | grep -c '\.defmt' >/dev/null; then   # not grep -q: SIGPIPE + pipefail
   "${qemu[@]}" -kernel "$elf" "$@" | defmt-print -e "$elf"

@@ -1,9 +1,11 @@
-//! The firmware's check of the target's assembly row loops (`m4`) against
-//! their portable twins, on rows at the bounds of their inputs and random
-//! ones, every length from 0 to [`LEN`] (both parities of the two-column
-//! loops): `scripts/embedded-check` runs it on the emulated M4 and M7.
-//! Targets without such loops pass trivially. Not part of the stable
-//! surface.
+//! The check of the target's own row loops against their portable twins,
+//! on rows at the bounds of their inputs and random ones, every length
+//! from 0 to [`LEN`] (both parities of the two-column loops, every position
+//! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
+//! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
+//! tail and bytes (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! (`scripts/embedded-check`). Targets without such loops pass trivially.
+//! Not part of the stable surface.
 
 /// The longest row checked.
 pub const LEN: usize = 41;
@@ -12,42 +14,60 @@ pub const LEN: usize = 41;
 pub fn run() -> Result<usize, &'static str> {
     #[cfg(fpu_f32)]
     return m4::run();
-    #[cfg(not(fpu_f32))]
+    #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
+    return neon::run();
+    #[cfg(not(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon"))))]
     Ok(0)
+}
+
+/// xorshift64: values across a range, and its ends one time in four.
+#[cfg(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")))]
+struct Values(u64);
+
+#[cfg(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")))]
+impl Values {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+
+    /// In `[−bound, bound]`.
+    fn within(&mut self, bound: i64) -> i64 {
+        let r = self.next();
+        match r % 8 {
+            0 => bound,
+            1 => -bound,
+            _ => (r >> 8) as i64 % (bound + 1) * if r & 16 == 0 { 1 } else { -1 },
+        }
+    }
+}
+
+/// The parameters the tails are checked at: the SPEC's defaults and
+/// `s = 1/1024, λ = 1e-6`.
+#[cfg(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")))]
+fn tail_params() -> Result<[crate::Params; 2], &'static str> {
+    let Ok(scale) = crate::IntensityScale::new(1, 1024) else {
+        return Err("magnitudes: scale");
+    };
+    let small = crate::Params {
+        scale,
+        lambda: fixed::types::U32F32::from_bits(4295),
+    };
+    Ok([crate::Params::DEFAULT, small])
 }
 
 #[cfg(fpu_f32)]
 mod m4 {
-    use super::LEN;
+    use super::{LEN, Values, tail_params};
     use crate::kernels::m4;
     use crate::kernels::wide_products;
     use crate::sink::portable_rgb_tail;
     use crate::stages::{binomial_of, running_binomial, sliding_binomial, vertical_parts_of};
     use crate::tail::{TailConstants, TailOut, TailRows, tail_row as tail_row_portable};
-    use crate::{ByteScale, Config, IntensityScale, Params};
+    use crate::{ByteScale, Config};
     use fixed::types::U16F16;
-
-    /// xorshift64: values across a range, and its ends one time in four.
-    struct Values(u64);
-
-    impl Values {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            self.0
-        }
-
-        /// In `[−bound, bound]`.
-        fn within(&mut self, bound: i64) -> i64 {
-            let r = self.next();
-            match r % 8 {
-                0 => bound,
-                1 => -bound,
-                _ => (r >> 8) as i64 % (bound + 1) * if r & 16 == 0 { 1 } else { -1 },
-            }
-        }
-    }
 
     pub(super) fn run() -> Result<usize, &'static str> {
         let mut values = Values(0x2545_f491_4f6c_dd1d);
@@ -229,15 +249,8 @@ mod m4 {
     /// (flat to the largest), `V` at its bound, at the default parameters
     /// and at `s = 1/1024, λ = 1e-6`.
     fn magnitudes(values: &mut Values, len: usize) -> Result<usize, &'static str> {
-        let Ok(scale) = IntensityScale::new(1, 1024) else {
-            return Err("magnitudes: scale");
-        };
-        let small = Params {
-            scale,
-            lambda: fixed::types::U32F32::from_bits(4295),
-        };
         let mut rows = 0;
-        for params in [Params::DEFAULT, small] {
+        for params in tail_params()? {
             let Ok(config) = Config::new(8, 8, params) else {
                 return Err("magnitudes: configuration");
             };
@@ -306,6 +319,259 @@ mod m4 {
                 return Err("curl_free_magnitudes");
             }
             rows += 2;
+        }
+        Ok(rows)
+    }
+}
+
+/// aarch64's NEON sums and tail (`kernels/neon.rs`) against the portable
+/// layout's: the horizontal `G` of product rows into the sums' rings, then
+/// each output row's vertical `G`, solve, magnitudes, extremes and fields,
+/// for outputs of every length from 0 to `LEN` (every position of a
+/// partial four-lane block) and every ring slot of an output row's first
+/// sums row; and its bytes against the portable pixels', rows of every
+/// length from 0 to `LEN` (two sixteen-pixel steps and every remainder).
+#[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
+mod neon {
+    use super::{LEN, Values, tail_params};
+    use crate::ByteScale;
+    use crate::kernels::neon::Neon;
+    use crate::kernels::{KernelSet, OutputRow, Portable, SumRings};
+    use crate::ring::take_rows;
+    use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
+    use crate::sink::portable_rgb_tail;
+    use crate::stages::{DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS};
+    use crate::tail::{TailConstants, TailOut};
+    use crate::{Config, ExtremesSink};
+    use fixed::types::U16F16;
+
+    /// The widest window checked.
+    const COLS: usize = LEN + 2 * HALO;
+    /// Window rows stored: the first output row is `2 · SUM_RADIUS` rows
+    /// in, and the outputs then take every slot of the ring.
+    const ROWS: usize = HALO + SUM_RADIUS + 2 * SUM_DEPTH;
+
+    pub(super) fn run() -> Result<usize, &'static str> {
+        let mut values = Values(0x2545_f491_4f6c_dd1d);
+        let mut rows = 0;
+        for len in 0..=LEN {
+            for params in tail_params()? {
+                let Ok(config) = Config::new(8, 8, params) else {
+                    return Err("neon: configuration");
+                };
+                let k = TailConstants {
+                    lambda4: config.lambda4,
+                    units: config.units(),
+                };
+                for fields in [false, true] {
+                    rows += sums_and_tail(&mut values, &k, len, fields)?;
+                }
+            }
+            rows += bytes(&mut values, len)?;
+        }
+        Ok(rows)
+    }
+
+    /// The representation's bytes (`KernelSet::rgb_row`) against the
+    /// portable pixels, on magnitudes of every size and kind (zero, tiny,
+    /// past the top byte, below the map's minimum, at a byte's half, and
+    /// the NaN, infinity and signed zero no engine's magnitude is, which
+    /// the saturating conversion maps all the same), under fixed gains and
+    /// per-frame min–max maps, one of them flat.
+    fn bytes(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        const ODD: [f32; 8] = [
+            f32::NAN,
+            f32::INFINITY,
+            -f32::INFINITY,
+            -0.0,
+            0.0,
+            0.5,
+            31.9375,
+            1e30,
+        ];
+        let mut row = || -> [f32; LEN] {
+            core::array::from_fn(|_| {
+                let v = values.next();
+                match (v >> 40) % 8 {
+                    0 => ODD[(v >> 44) as usize % ODD.len()],
+                    k => {
+                        f32::from_bits((v as u32 >> 9) | 0x3000_0000)
+                            * [0.0, 1.0, 64.0, 1e6, 1e-3, 8.0, 255.0][k as usize - 1]
+                    }
+                }
+            })
+        };
+        let (m_d, m_c) = (row(), row());
+        let luma: [u8; LEN] = core::array::from_fn(|_| values.next() as u8);
+        let mut rows = 0;
+        for [scale_d, scale_c] in [
+            [
+                ByteScale::fixed(U16F16::from_num(8)),
+                ByteScale::fixed(U16F16::from_num(32)),
+            ],
+            [
+                ByteScale::min_max(0.001, 3.5),
+                ByteScale::min_max(0.0, 1e-3),
+            ],
+            [ByteScale::min_max(2.0, 2.0), ByteScale::min_max(-1.0, 1e7)],
+        ] {
+            let (mut want, mut got) = ([[0u8; 3]; LEN], [[0u8; 3]; LEN]);
+            let (m_d, m_c, luma) = (&m_d[..len], &m_c[..len], &luma[..len]);
+            let scales = [&scale_d, &scale_c];
+            portable_rgb_tail(m_d, m_c, luma, scales, &mut want[..len]);
+            Neon::rgb_row(m_d, m_c, luma, scales, &mut got[..len]);
+            if want != got {
+                return Err("neon: rgb_row");
+            }
+            rows += 1;
+        }
+        Ok(rows)
+    }
+
+    /// One window row's product rows and `V`, as the engine makes them:
+    /// gradients within ±1020 and residuals within ±2²⁷ (their bounds,
+    /// one time in four), `V` within its bound.
+    struct Window {
+        ints: [[i32; COLS]; INT_CHANNELS],
+        floats: [[f32; COLS]; FLOAT_CHANNELS],
+        v: [[i32; COLS]; 2],
+    }
+
+    fn window(values: &mut Values) -> Window {
+        let mut w = Window {
+            ints: [[0; COLS]; INT_CHANNELS],
+            floats: [[0.0; COLS]; FLOAT_CHANNELS],
+            v: [[0; COLS]; 2],
+        };
+        for i in 0..COLS {
+            let (x, y) = (values.within(1020) as i32, values.within(1020) as i32);
+            let dn = values.within(1 << 27) as i32 as f32 * DN_SCALE;
+            w.ints[0][i] = x * x;
+            w.ints[1][i] = x * y;
+            w.ints[2][i] = y * y;
+            w.floats[0][i] = x as f32 * dn;
+            w.floats[1][i] = y as f32 * dn;
+            w.v[0][i] = values.within(6_854_400) as i32;
+            w.v[1][i] = values.within(6_854_400) as i32;
+        }
+        w
+    }
+
+    /// What one set wrote for an output row: the magnitudes, the fields
+    /// (when asked for) and the extremes.
+    struct Written {
+        rows: [[u32; LEN]; 6],
+        extremes: [u32; 4],
+    }
+
+    /// Memory for one set: its rings, and the product rows and free rows
+    /// the engine lends an output row.
+    const WORDS: usize = (SUM_DEPTH + 2) * INT_CHANNELS * COLS;
+    const FLOATS: usize = (SUM_DEPTH + 2) * FLOAT_CHANNELS * COLS;
+
+    /// One set's rings over windows of `n` columns, with the product rows
+    /// it stores from and the rows its tail may use (`OutputRow`).
+    struct Side<'m, K: KernelSet> {
+        sums: K::Sums<'m>,
+        ints: [&'m mut [i32]; INT_CHANNELS],
+        floats: [&'m mut [f32]; FLOAT_CHANNELS],
+        scratch_ints: [&'m mut [i32]; INT_CHANNELS],
+        scratch_floats: [&'m mut [f32]; FLOAT_CHANNELS],
+    }
+
+    impl<'m, K: KernelSet> Side<'m, K> {
+        fn new(kernels: K, mut words: &'m mut [i32], mut floats: &'m mut [f32], n: usize) -> Self {
+            let sums = <K::Sums<'m> as SumRings<'m, K>>::carve(kernels, &mut words, &mut floats, n);
+            Self {
+                sums,
+                ints: take_rows(&mut words, n),
+                floats: take_rows(&mut floats, n),
+                scratch_ints: take_rows(&mut words, n),
+                scratch_floats: take_rows(&mut floats, n),
+            }
+        }
+
+        /// Window row `t`'s products into the rings.
+        fn store(&mut self, t: usize, w: &Window, n: usize) {
+            for (row, from) in self.ints.iter_mut().zip(&w.ints) {
+                row.copy_from_slice(&from[..n]);
+            }
+            for (row, from) in self.floats.iter_mut().zip(&w.floats) {
+                row.copy_from_slice(&from[..n]);
+            }
+            self.sums
+                .store_row(t, (&mut self.ints, &mut self.floats), n);
+        }
+
+        /// Output row `o`'s tail, `len` columns.
+        fn tail(
+            &mut self,
+            o: usize,
+            v: [&[i32]; 2],
+            k: &TailConstants,
+            len: usize,
+            fields: bool,
+        ) -> Written {
+            let n = len + 2 * HALO;
+            let mut out = [[0f32; LEN]; 6];
+            let [m_d, m_c, f0, f1, f2, f3] = out.each_mut().map(|r| &mut r[..len]);
+            let row = OutputRow {
+                o,
+                n,
+                products: (&mut self.scratch_ints, &mut self.scratch_floats),
+                v,
+                constants: k,
+            };
+            let m = [m_d, m_c];
+            let found = self.sums.tail_row(
+                row,
+                TailOut {
+                    m,
+                    fields: fields.then_some([f0, f1, f2, f3]),
+                },
+            );
+            let found =
+                found.unwrap_or_else(|| ExtremesSink::of_rows(&out[0][..len], &out[1][..len]));
+            let extremes = [found.m_d.min, found.m_d.max, found.m_c.min, found.m_c.max];
+            Written {
+                rows: out.map(|r| r.map(f32::to_bits)),
+                extremes: extremes.map(f32::to_bits),
+            }
+        }
+    }
+
+    /// Both sets' rings, over windows of `len + 14` columns.
+    fn sums_and_tail(
+        values: &mut Values,
+        k: &TailConstants,
+        len: usize,
+        fields: bool,
+    ) -> Result<usize, &'static str> {
+        let n = len + 2 * HALO;
+        let (mut words, mut floats) = ([[0i32; WORDS]; 2], [[0f32; FLOATS]; 2]);
+        let [words_p, words_n] = &mut words;
+        let [floats_p, floats_n] = &mut floats;
+        let mut portable = Side::new(Portable, words_p, floats_p, n);
+        let mut neon = Side::new(Neon, words_n, floats_n, n);
+        let mut rows = 0;
+        for t in 0..ROWS {
+            let w = window(values);
+            portable.store(t, &w, n);
+            neon.store(t, &w, n);
+            let Some(o) = t.checked_sub(SUM_RADIUS).filter(|&o| o >= HALO) else {
+                continue;
+            };
+            let v = w.v.each_ref().map(|r| &r[..n]);
+            let want = portable.tail(o, v, k, len, fields);
+            let got = neon.tail(o, v, k, len, fields);
+            if want.rows != got.rows {
+                return Err("neon: sums and tail");
+            }
+            // With the fields, the extremes are the engine's to find.
+            if !fields && want.extremes != got.extremes {
+                return Err("neon: extremes");
+            }
+            rows += 1;
         }
         Ok(rows)
     }

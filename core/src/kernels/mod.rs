@@ -13,14 +13,17 @@
 //!   hosts that find AVX2 and FMA at run time, chosen when a job is bound
 //!   (`Job::with_avx2`), held equal to the
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
-//!   in a layout of its own, which it names as its [`KernelSet::Sums`].
+//!   in a layout of its own, which it names as its [`KernelSet::Sums`];
+//! - `neon`: the same layout and tail, and the bytes, in NEON lanes for
+//!   aarch64, fixed at compile time, held equal to the portable sums, tail
+//!   and bytes by `kernel_check` under `qemu-aarch64`.
 //!
 //! [`fpu`] holds the two per-target instructions the portable code itself
 //! calls (the `f32` square root, the byte of a clamped value).
 //!
 //! The engine runs one set for a whole tile ([`Choice::run`]): firmware
-//! gets [`Native`], fixed at compile time; a host's job may carry the AVX2
-//! set instead.
+//! and aarch64 get [`Native`], fixed at compile time; an x86-64 host's job
+//! may carry the AVX2 set instead.
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx2;
@@ -29,6 +32,8 @@ pub(crate) mod fpu;
 pub mod kernel_check;
 #[cfg(fpu_f32)]
 pub(crate) mod m4;
+#[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
+pub(crate) mod neon;
 pub(crate) mod wide_products;
 
 use core::ops::Range;
@@ -100,6 +105,21 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>) {
         tail::tail_row(k, rows, out);
+    }
+
+    /// The representation's bytes of a row segment (`sink::rgb_row`):
+    /// [`sink::batched_rgb_row`](crate::sink::batched_rgb_row), whose
+    /// remainder (all of it on the scalar boards) goes to
+    /// [`KernelSet::rgb_pixels`].
+    #[inline(always)]
+    fn rgb_row(
+        m_d: &[f32],
+        m_c: &[f32],
+        luma: &[u8],
+        scales: [&ByteScale; 2],
+        out: &mut [[u8; 3]],
+    ) {
+        crate::sink::batched_rgb_row::<Self>(m_d, m_c, luma, scales, out);
     }
 
     /// The representation's bytes of a row segment one pixel at a time
@@ -216,7 +236,12 @@ pub(crate) fn from_first_output<T>(row: &[T]) -> &[T] {
 
 /// The portable kernels, every method its default.
 #[derive(Clone, Copy, Debug, Default)]
-#[cfg_attr(fpu_f32, allow(dead_code))] // there the M4 set is `Native`
+// Where a target's own set is `Native` (M4F, aarch64), only
+// `kernel_check` names this one.
+#[cfg_attr(
+    any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")),
+    allow(dead_code)
+)]
 pub(crate) struct Portable;
 
 impl KernelSet for Portable {
@@ -224,11 +249,15 @@ impl KernelSet for Portable {
 }
 
 /// The set this target's firmware runs, fixed at compile time: the
-/// M4F's (and M7's) on 32-bit hard-float Arm, the portable one elsewhere.
+/// M4F's (and M7's) on 32-bit hard-float Arm, NEON's on aarch64, the
+/// portable one elsewhere.
 #[cfg(fpu_f32)]
 pub(crate) type Native = m4::M4;
-/// The set this target's firmware runs, fixed at compile time.
-#[cfg(not(fpu_f32))]
+/// The set this target runs, fixed at compile time.
+#[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
+pub(crate) type Native = neon::Neon;
+/// The set this target runs, fixed at compile time.
+#[cfg(not(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon"))))]
 pub(crate) type Native = Portable;
 
 /// What runs with the set a job chose, monomorphised per set
