@@ -24,8 +24,11 @@ fn the_readme_picture_is_what_command_1_writes() {
             .contains(&format!("]({picture})")),
         "README.md no longer shows {picture}"
     );
-    let committed =
-        std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/run-output.png")).unwrap();
+    let committed = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/run-output.png"
+    ))
+    .unwrap();
     assert!(
         written == committed,
         "{picture} is not what `run` writes for frame 10 of the demo: copy reynoldsflow-out/000010.png there"

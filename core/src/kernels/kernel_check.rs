@@ -12,19 +12,19 @@ pub const LEN: usize = 41;
 
 /// Rows compared, or the first loop whose output differs from its twin's.
 pub fn run() -> Result<usize, &'static str> {
-    #[cfg(fpu_f32)]
+    #[cfg(m4_kernels)]
     return m4::run();
     #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
     return neon::run();
-    #[cfg(not(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon"))))]
+    #[cfg(not(any(m4_kernels, all(target_arch = "aarch64", target_feature = "neon"))))]
     Ok(0)
 }
 
 /// xorshift64: values across a range, and its ends one time in four.
-#[cfg(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")))]
+#[cfg(any(m4_kernels, all(target_arch = "aarch64", target_feature = "neon")))]
 struct Values(u64);
 
-#[cfg(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")))]
+#[cfg(any(m4_kernels, all(target_arch = "aarch64", target_feature = "neon")))]
 impl Values {
     fn next(&mut self) -> u64 {
         self.0 ^= self.0 << 13;
@@ -46,7 +46,7 @@ impl Values {
 
 /// The parameters the tails are checked at: the SPEC's defaults and
 /// `s = 1/1024, λ = 1e-6`.
-#[cfg(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")))]
+#[cfg(any(m4_kernels, all(target_arch = "aarch64", target_feature = "neon")))]
 fn tail_params() -> Result<[crate::Params; 2], &'static str> {
     let Ok(scale) = crate::IntensityScale::new(1, 1024) else {
         return Err("magnitudes: scale");
@@ -58,7 +58,7 @@ fn tail_params() -> Result<[crate::Params; 2], &'static str> {
     Ok([crate::Params::DEFAULT, small])
 }
 
-#[cfg(fpu_f32)]
+#[cfg(m4_kernels)]
 mod m4 {
     use super::{LEN, Values, tail_params};
     use crate::kernels::m4;

@@ -1,4 +1,4 @@
-//! The Cortex-M4F and M7 forms (`fpu_f32`: 32-bit Arm, hard float) of the
+//! The Cortex-M4F and M7 forms (`m4_kernels`: 32-bit Arm, hard float, DSP instructions) of the
 //! row loops where the compiler's own code spent the most: the vertical
 //! binomials two columns a step, one double-word load per row (`LDRD`,
 //! `VLDM`); the horizontal ones with their taps carried in registers that

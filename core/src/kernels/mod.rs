@@ -7,7 +7,7 @@
 //! overrides the loops it has faster forms of, each computing exactly the
 //! values (and, in `f32`, the roundings in the order) of the portable one:
 //! - `m4` (with `wide_products`): the Cortex-M4F's and M7's hottest row
-//!   loops in `asm!`, chosen at compile time (`fpu_f32`), held equal to
+//!   loops in `asm!`, chosen at compile time (`m4_kernels`), held equal to
 //!   their portable twins by `kernel_check` on the emulated boards;
 //! - `avx2`: the structure sums and the tail in AVX2 lanes for x86-64
 //!   hosts that find AVX2 and FMA at run time, chosen when a job is bound
@@ -30,7 +30,7 @@ pub(crate) mod avx2;
 pub(crate) mod fpu;
 #[cfg(feature = "kernel-check")]
 pub mod kernel_check;
-#[cfg(fpu_f32)]
+#[cfg(m4_kernels)]
 pub(crate) mod m4;
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 pub(crate) mod neon;
@@ -239,7 +239,7 @@ pub(crate) fn from_first_output<T>(row: &[T]) -> &[T] {
 // Where a target's own set is `Native` (M4F, aarch64), only
 // `kernel_check` names this one.
 #[cfg_attr(
-    any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon")),
+    any(m4_kernels, all(target_arch = "aarch64", target_feature = "neon")),
     allow(dead_code)
 )]
 pub(crate) struct Portable;
@@ -251,13 +251,13 @@ impl KernelSet for Portable {
 /// The set this target's firmware runs, fixed at compile time: the
 /// M4F's (and M7's) on 32-bit hard-float Arm, NEON's on aarch64, the
 /// portable one elsewhere.
-#[cfg(fpu_f32)]
+#[cfg(m4_kernels)]
 pub(crate) type Native = m4::M4;
 /// The set this target runs, fixed at compile time.
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 pub(crate) type Native = neon::Neon;
 /// The set this target runs, fixed at compile time.
-#[cfg(not(any(fpu_f32, all(target_arch = "aarch64", target_feature = "neon"))))]
+#[cfg(not(any(m4_kernels, all(target_arch = "aarch64", target_feature = "neon"))))]
 pub(crate) type Native = Portable;
 
 /// What runs with the set a job chose, monomorphised per set

@@ -1,4 +1,4 @@
-//! The structure products of one row on the M4F and M7 (`fpu_f32`), in
+//! The structure products of one row on the M4F and M7 (`m4_kernels`), in
 //! five short loops, the residual with 64-bit multiply-accumulates
 //! (`SMULL`/`SMLAL`), where `stages::products_of` is one loop over 22 rows
 //! with the residual in 32-bit halves: more rows than the M4 has registers
@@ -29,7 +29,7 @@ use crate::stages::{DN_SCALE, ResidualInputs, ScratchRows, cut, cut_rows};
 /// rows the memory
 /// cannot serve (never, once an engine has validated it) leave them
 /// untouched.
-#[cfg_attr(not(fpu_f32), allow(dead_code))] // the M4 set's; tested everywhere
+#[cfg_attr(not(m4_kernels), allow(dead_code))] // the M4 set's; tested everywhere
 pub(crate) fn products_row(
     input: &ResidualInputs<'_>,
     [xx, xy, yy]: [&mut [i32]; 3],
@@ -57,9 +57,9 @@ pub(crate) fn products_row(
     let ScratchRows { gx, gy, high, low } = scratch;
     cut_rows!(start, len => vy_up, vy, vy_down, d; mut gx, gy, high, low);
     // The M4F and M7 run two of the loops in assembly (`m4`).
-    #[cfg(fpu_f32)]
+    #[cfg(m4_kernels)]
     crate::kernels::m4::gradients(up, mid, down, gx, gy);
-    #[cfg(not(fpu_f32))]
+    #[cfg(not(m4_kernels))]
     gradients_of(up, mid, down, gx, gy);
     int_products_of(gx, gy, xx, xy, yy);
     divergence_of(vx, vy_up, vy_down, high);
@@ -67,9 +67,9 @@ pub(crate) fn products_row(
     // σ is 8 for every `s ≥ 1/1024`: its shifts are constants there.
     if shift == 8 {
         residual_base_of::<8>(kappa, shift, p0, d, high, low);
-        #[cfg(fpu_f32)]
+        #[cfg(m4_kernels)]
         crate::kernels::m4::residual_products_8(gx, gy, vx, vy, high, low, xd, yd);
-        #[cfg(not(fpu_f32))]
+        #[cfg(not(m4_kernels))]
         residual_products_of::<8>(shift, gx, gy, vx, vy, high, low, xd, yd);
     } else {
         residual_base_of::<0>(kappa, shift, p0, d, high, low);
@@ -92,7 +92,7 @@ fn one_column_a_step() {
 /// differences `d − u` (±255) carried from column to column, three loads a
 /// column.
 #[inline(never)]
-#[cfg_attr(fpu_f32, allow(dead_code))] // there `m4::gradients`'s twin (`kernel_check`)
+#[cfg_attr(m4_kernels, allow(dead_code))] // there `m4::gradients`'s twin (`kernel_check`)
 pub(crate) fn gradients_of(up: &[u8], mid: &[u8], down: &[u8], gx: &mut [i16], gy: &mut [i16]) {
     let len = gx.len();
     let (Some(rows), Some(gy)) = (gradient_rows([up, mid, down], len), gy.get_mut(..len)) else {
