@@ -47,7 +47,7 @@ def test_quick_trains_every_input_on_both_families_and_every_seed(quick):
     curves = _csv(out / "curves.csv")
     for f, n, s in got:
         steps = [int(c["step"]) for c in curves if (c["family"], c["input"], c["seed"]) == (f, n, s)]
-        assert steps and steps == sorted(steps) and all(x % train.EVERY == 0 or x == run.QUICK["max_steps"]
+        assert steps and steps == sorted(steps) and all(x % run.QUICK["every"] == 0 or x == run.QUICK["max_steps"]
                                                         for x in steps)
     ivs = _csv(out / "intervals.csv")
     for f in run.FAMILIES:
@@ -80,7 +80,8 @@ def test_calibration_walks_the_ladder_on_gray_only(tmp_path):
 def test_committed_calibration_is_what_the_benchmark_runs_with():
     root = Path(os.environ["REYNOLDSFLOW_REPO"])
     text = (root / "docs" / "downstream" / "detection" / "calibration.md").read_text()
-    assert "`python -m reynoldsflow.bench.detection --out docs/downstream/detection --calibrate`" in text
+    command = re.search(r"Command: `([^`]+)`", text).group(1)
+    assert command.startswith("python -m reynoldsflow.bench.detection --out docs/downstream/detection --calibrate")
     for fam, label in (("sky", "generated skies"), ("real", "real footage")):
         lo, hi = run.CALIBRATED[fam]
         assert f"- {label}: contrast {lo:g}-{hi:g} gray levels" in text

@@ -47,11 +47,12 @@ GRAY_RANGE = (0.2, 0.7)
 DEFAULT_INPUTS = ("gray", "diff", "farneback", "tvl1", "dis", "deepflow", "pcaflow", "rf", "rf dc0", "rf cd",
                   "rf hsv")
 REFERENCE = "rf"
-DEFAULT = dict(seeds=5, train=2000, val=200, test=400, max_steps=2000, bootstrap=1000)
-QUICK = dict(seeds=2, train=40, val=12, test=16, max_steps=100, bootstrap=50)
+DEFAULT = dict(seeds=5, train=2000, val=200, test=400, max_steps=2000, every=50, bootstrap=1000)
+QUICK = dict(seeds=1, train=16, val=8, test=12, max_steps=20, every=10, bootstrap=50)
 HELP = dict(seeds="seeds (each: its own patches, crops and initial weights)", train="training patches per seed",
             val="validation patches per seed (early stopping)", test="test patches per seed",
-            max_steps="most training steps", bootstrap="bootstrap replicates of the intervals")
+            max_steps="most training steps", every="steps between validation losses",
+            bootstrap="bootstrap replicates of the intervals")
 
 
 def _args(argv):
@@ -87,13 +88,13 @@ def _job(family, seed, names, contrasts, a_sizes, factors, videos):
     from ..downstream import detector
 
     torch.set_num_threads(1)
-    n_train, n_val, n_test, max_steps = a_sizes
+    n_train, n_val, n_test, max_steps, every = a_sizes
     pools = {part: patches.make(family, seed, part, n, names, SIZES, contrasts, factors, videos)
              for part, n in (("train", n_train), ("val", n_val), ("test", n_test))}
     tr, va, te = pools["train"], pools["val"], pools["test"]
     rows, curves, recs = [], [], {}
     for name in names:
-        model, norm, curve = train.fit(tr.x[name], tr.centers, va.x[name], va.centers, seed, max_steps)
+        model, norm, curve = train.fit(tr.x[name], tr.centers, va.x[name], va.centers, seed, max_steps, every)
         heat = detector.heatmaps(model, norm, te.x[name])
         found = metrics.peaks(heat)
         keep = np.isfinite(found[..., 2])
@@ -154,7 +155,7 @@ def _verdict(iv) -> str:
 
 
 def _calibrate(a, factors, videos, start) -> int:
-    sizes = (a.train, a.val, a.test, a.max_steps)
+    sizes = (a.train, a.val, a.test, a.max_steps, a.every)
     lines = ["# Difficulty calibration of the detection benchmark (gray input only)", "",
              f"Command: `{a.command}`.", "",
              f"Gray's AP (3 px) over seeds {', '.join(map(str, CALIBRATION_SEEDS))} (apart from the evaluation's "
@@ -219,7 +220,7 @@ def main(argv=None) -> int:
             return 2
     if a.calibrate:
         return _calibrate(a, factors, videos, start)
-    sizes = (a.train, a.val, a.test, a.max_steps)
+    sizes = (a.train, a.val, a.test, a.max_steps, a.every)
     jobs = [(fam, s, names, CALIBRATED[fam], sizes, factors, videos) for fam in a.families for s in range(a.seeds)]
     got = _run_jobs(jobs, a, start)
     rows = [r for j in jobs for r in got[j[:2]][0]]
@@ -255,7 +256,7 @@ def main(argv=None) -> int:
           f"{SIZES[0]:g}-{SIZES[1]:g} px; contrast (calibrated on gray, --calibrate) "
           + ", ".join(f"{f} {CALIBRATED[f][0]:g}-{CALIBRATED[f][1]:g}" for f in fams)
           + f" gray levels; training: crops of {train.CROP} px, {train.BATCH} per step, validation every "
-          f"{train.EVERY} steps, stop after {train.PATIENCE} without a 1 % fall, at most {a.max_steps} steps; "
+          f"{a.every} steps, stop after {train.PATIENCE} without a 1 % fall, at most {a.max_steps} steps; "
           f"bootstrap {a.bootstrap}; workers {a.workers}; cpus {os.cpu_count()}; load average at end "
           + "{:.1f}, {:.1f}, {:.1f}".format(*os.getloadavg()) + ".", "",
           "## AP (3 px), mean over seeds, bootstrap 95 % interval over seeds and test patches", ""] + head + [

@@ -3,8 +3,9 @@
 The network, loss, target and channel standardisation are the downstream
 benchmark's (``downstream.detector``). Each step draws BATCH crops of CROP
 px from the training patches (POSITIVE of them around a drone), the same
-crops in the same order for every input of a seed; every EVERY steps the
-mean focal loss over the whole validation patches is measured; training
+crops in the same order for every input of a seed; every `every` steps
+(EVERY by default) the mean focal loss over the whole validation patches
+is measured; training
 stops when it has not fallen below its best by 1 % for PATIENCE
 measurements (or at max_steps), and the weights of the best measurement
 are kept."""
@@ -49,7 +50,7 @@ def _crops(rng: np.random.Generator, centers: np.ndarray, size: int) -> np.ndarr
 
 
 def fit(x_train: np.ndarray, centers: np.ndarray, x_val: np.ndarray, val_centers: np.ndarray, seed: int,
-        max_steps: int, lr: float = 3e-3):
+        max_steps: int, every: int = EVERY, lr: float = 3e-3):
     """(model, standardiser, Curve) trained on uint8 (N, P, P, C) patches."""
     start = time.perf_counter()
     n, size, _, channels = x_train.shape
@@ -75,7 +76,7 @@ def fit(x_train: np.ndarray, centers: np.ndarray, x_val: np.ndarray, val_centers
         opt.step()
         pending.append(loss.item())
         step += 1
-        if step % EVERY == 0 or step == max_steps:
+        if step % every == 0 or step == max_steps:
             model.eval()
             with torch.inference_mode():
                 v = float(np.mean([detector.focal_loss(model(xv[i : i + 64]), tv[i : i + 64]).item()

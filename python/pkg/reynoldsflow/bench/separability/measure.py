@@ -17,8 +17,9 @@ Windows (px, on the 160x120 frames):
   BSF = std_B(gray) / std_B(channel);
 - **Pd at a false-alarm rate Fa**: the threshold on a score map is the one
   that at most a fraction Fa of background pixels (every pixel of a
-  drone-free frame; of a drone frame, those farther than d/2 + 4 px from
-  the drone) exceed, pooled over the test clips; a drone frame is detected
+  drone-free frame; of a drone frame, those farther than d/2 + 11 px from
+  the drone, beyond the reach of the statistic's 21x21 window centred on
+  it) exceed, pooled over the test clips; a drone frame is detected
   when the score's maximum over T reaches it. Scores are binned on a log
   scale (64 bins per octave, 1.1 % apart) so the bootstrap can resample
   clips by summing histograms.
@@ -29,7 +30,8 @@ from __future__ import annotations
 import numpy as np
 
 INNER, GUARD, OUTER = 3, 9, 21  # the detection statistic's windows (px)
-T_EXTRA, B_GUARD = 1.0, 4.0  # T: within d/2 + 1 px; B and Fa: farther than d/2 + 4 px
+T_EXTRA, B_GUARD = 1.0, 4.0  # T: within d/2 + 1 px; B: farther than d/2 + 4 px
+FA_GUARD = OUTER // 2 + 1  # false-alarm pixels: farther than d/2 + 11 px
 FAS = (1e-3, 1e-4, 1e-5)
 UNIT, PER_OCTAVE, OCTAVES = 1e-4, 64, 26
 NBINS = PER_OCTAVE * OCTAVES + 1
@@ -38,14 +40,11 @@ SCR_CAP = 1e3  # an SCR on a background with no spread at all
 
 def box_mean(x: np.ndarray, k: int) -> np.ndarray:
     """Mean over the k x k window centred at every pixel (k odd), the
-    frame mirrored at its border (numpy 'reflect')."""
-    r = k // 2
-    p = np.pad(x.astype(np.float64), r, mode="reflect")
-    c = np.zeros((p.shape[0] + 1, p.shape[1] + 1))
-    c[1:, 1:] = p.cumsum(0).cumsum(1)
-    h, w = x.shape
-    s = c[k : k + h, k : k + w] - c[:h, k : k + w] - c[k : k + h, :w] + c[:h, :w]
-    return s / (k * k)
+    frame mirrored at its border without repeating the edge (OpenCV's
+    BORDER_REFLECT_101, numpy's 'reflect')."""
+    import cv2
+
+    return cv2.blur(np.asarray(x, np.float64), (k, k), borderType=cv2.BORDER_REFLECT_101)
 
 
 def local_contrast(x: np.ndarray) -> np.ndarray:
@@ -58,7 +57,7 @@ def local_contrast(x: np.ndarray) -> np.ndarray:
 def regions(shape: tuple, center: np.ndarray, diameter: float) -> tuple:
     """(T, B, far) boolean masks of a drone at `center` (x, y): T within
     d/2 + 1 px, B the 21x21 window's pixels farther than d/2 + 4 px, far
-    every pixel farther than d/2 + 4 px (the false-alarm pixels)."""
+    every pixel farther than d/2 + 11 px (the false-alarm pixels)."""
     h, w = shape
     yy, xx = np.mgrid[0:h, 0:w]
     dist = np.hypot(xx - center[0], yy - center[1])
@@ -66,11 +65,10 @@ def regions(shape: tuple, center: np.ndarray, diameter: float) -> tuple:
     target = dist <= r + T_EXTRA
     if not target.any():  # at least the pixel holding the centre
         target[int(np.clip(np.floor(center[1]), 0, h - 1)), int(np.clip(np.floor(center[0]), 0, w - 1))] = True
-    far = dist > r + B_GUARD
     half = OUTER // 2
     cx, cy = int(np.floor(center[0])), int(np.floor(center[1]))
     window = (np.abs(xx - cx) <= half) & (np.abs(yy - cy) <= half)
-    return target, window & far, far
+    return target, window & (dist > r + B_GUARD), dist > r + FA_GUARD
 
 
 def scr(x: np.ndarray, target: np.ndarray, background: np.ndarray) -> tuple:

