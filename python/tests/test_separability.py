@@ -119,11 +119,13 @@ def test_fisher_weights_the_separating_channel():
 
 
 def test_every_input_has_its_channels_named():
-    frames = np.random.default_rng(5).integers(0, 255, size=(3, 48, 64), dtype=np.uint8)
+    from reynoldsflow.bench.downstream import scenes
+
+    frames = scenes.make_clip(np.random.default_rng(5), scenes.FACTORS, 3).frames
     got = channels.maps(frames, channels.DEFAULT)
     assert len(got) == 2
     for name in channels.DEFAULT:
-        assert got[0][name].shape == (len(channels.NAMES[name]), 48, 64), name
+        assert got[0][name].shape == (len(channels.NAMES[name]), scenes.HEIGHT, scenes.WIDTH), name
         assert got[0][name].dtype == np.float32
     with pytest.raises(ValueError, match="unknown inputs"):
         channels.select(["rf", "sobel"])
@@ -182,3 +184,38 @@ def test_bad_options_are_refused_before_any_work(tmp_path):
     res = subprocess.run([sys.executable, "-m", "reynoldsflow.bench.separability", "--out", str(tmp_path / "o"),
                           "--seeds", "0"], capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "--seeds" in res.stderr
+
+
+def _md_rows(text, header_start):
+    lines = text.splitlines()
+    start = next(i for i, l in enumerate(lines) if l.startswith(header_start))
+    out = []
+    for line in lines[start + 2 :]:
+        if not line.startswith("|"):
+            break
+        out.append(line)
+    return out
+
+
+def test_docs_carry_the_committed_run():
+    """docs/evaluation.md's separability table is the committed run's
+    headline (docs/downstream/separability/report.md, whose command is named
+    beside it), and the README's figures are that run's within 2x."""
+    root = Path(os.environ["REYNOLDSFLOW_REPO"])
+    rep = (root / "docs" / "downstream" / "separability" / "report.md").read_text()
+    command = next(l for l in rep.splitlines() if l.startswith("Command: `")).split("`")[1]
+    assert command.startswith("python -m reynoldsflow.bench.separability --out docs/downstream/separability")
+    docs = (root / "docs" / "evaluation.md").read_text()
+    header = "| input | generated skies: Pd at Fa 1e-4 | real footage: Pd at Fa 1e-4 |"
+    assert _md_rows(docs, header) == _md_rows(rep, header) and len(_md_rows(rep, header)) >= 10
+    assert command.split(" --out ")[0] + " --out" in " ".join(docs.split())
+    with open(root / "docs" / "downstream" / "separability" / "intervals.csv", newline="") as f:
+        rows = {(r["family"], r["input"], r["score"], r["metric"], r["bin"]): float(r["estimate"])
+                for r in csv.DictReader(f)}
+    line = next(l for l in (root / "README.md").read_text().splitlines() if "docs/evaluation.md" in l and "Pd" in l)
+    import re
+
+    for name, value in re.findall(r"`(rf|gray|diff)` (\d\.\d\d)", line):
+        want = rows[("sky", name, "combination", "pd@1e-03", "all")]
+        assert want / 2 <= float(value) <= want * 2 or abs(float(value) - want) < 0.005, (name, value, want)
+    assert re.findall(r"`(rf|gray|diff)` (\d\.\d\d)", line)

@@ -41,7 +41,7 @@ SIZES = (2.0, 6.0)  # the drone's diameter range (px), both families
 LADDER = ((24.0, 96.0), (16.0, 64.0), (10.0, 40.0), (6.0, 24.0), (4.0, 16.0), (3.0, 12.0), (2.0, 8.0))
 # Written by --calibrate (docs/downstream/detection/calibration.md): the
 # contrast range per family at which gray's AP lies in [0.2, 0.7].
-CALIBRATED = {"sky": (10.0, 40.0), "real": (10.0, 40.0)}
+CALIBRATED = {"sky": (16.0, 64.0), "real": (24.0, 96.0)}
 CALIBRATION_SEEDS = (100, 101)
 GRAY_RANGE = (0.2, 0.7)
 DEFAULT_INPUTS = ("gray", "diff", "farneback", "tvl1", "dis", "deepflow", "pcaflow", "rf", "rf dc0", "rf cd",
