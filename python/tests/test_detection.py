@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reynoldsflow.bench.detection import patches, run, train
+from reynoldsflow.bench.detection import patches, run
 
 
 def _csv(path):
@@ -94,3 +94,26 @@ def test_patches_are_distinct_and_hold_their_drone():
     assert np.isnan(pool.centers[-2:]).all() and np.isfinite(pool.centers[:6]).all()
     assert all(20 <= c <= 30 for c in pool.contrasts[:6]) and all(2 <= d <= 6 for d in pool.diameters[:6])
     assert len({pool.x["gray"][i].tobytes() for i in range(8)}) == 8
+
+
+def test_docs_carry_the_committed_run():
+    """docs/evaluation.md's detection table is the committed run's
+    (docs/downstream/detection/report.md), whose command is named beside it."""
+    root = Path(os.environ["REYNOLDSFLOW_REPO"])
+    rep = (root / "docs" / "downstream" / "detection" / "report.md").read_text()
+    command = re.search(r"Command: `([^`]+)`", rep).group(1)
+    assert command.startswith("python -m reynoldsflow.bench.detection --out docs/downstream/detection ")
+    docs = (root / "docs" / "evaluation.md").read_text()
+    assert command in " ".join(docs.split())
+
+    def rows(text):
+        lines = text.splitlines()
+        start = next(i for i, l in enumerate(lines) if l.startswith("| input | generated skies: AP (3 px)"))
+        out = []
+        for line in lines[start + 2 :]:
+            if not line.startswith("|"):
+                break
+            out.append(line)
+        return out
+
+    assert rows(docs) == rows(rep) and len(rows(rep)) >= 4

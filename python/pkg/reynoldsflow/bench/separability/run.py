@@ -15,7 +15,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
 from ..downstream import backgrounds, scenes
 from ..downstream import run as downstream_run
