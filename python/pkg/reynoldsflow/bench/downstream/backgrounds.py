@@ -118,9 +118,11 @@ def split(paths: Sequence[Path], seed: int) -> Tuple[List[Path], List[Path]]:
 
 
 def make_clip(rng: np.random.Generator, video: Video, frames: int, drone: bool,
-              width: int = scenes.WIDTH, height: int = scenes.HEIGHT) -> scenes.Clip:
+              width: int = scenes.WIDTH, height: int = scenes.HEIGHT, sizes: tuple = (2.0, 6.0),
+              contrasts: tuple = (10.0, 40.0)) -> scenes.Clip:
     """`frames` consecutive frames of the video at a random start and crop,
-    with a drone composited (or none)."""
+    with a drone composited (or none); its diameter (px) and contrast (gray
+    levels) drawn uniformly from `sizes` and `contrasts`."""
     n, h, w = video.frames.shape
     t0 = int(rng.integers(0, n - frames + 1))
     y0, x0 = int(rng.integers(0, h - height + 1)), int(rng.integers(0, w - width + 1))
@@ -128,7 +130,7 @@ def make_clip(rng: np.random.Generator, video: Video, frames: int, drone: bool,
     centers = np.full((frames, 2), np.nan)
     contrast = diameter = 0.0
     if drone:
-        diameter, contrast = rng.uniform(2, 6), rng.uniform(10, 40)
+        diameter, contrast = rng.uniform(*sizes), rng.uniform(*contrasts)
         sign = -1.0 if rng.random() < 0.75 else 1.0
         r = diameter / 2
         p = np.array([rng.uniform(8, width - 8), rng.uniform(8, height - 8)])

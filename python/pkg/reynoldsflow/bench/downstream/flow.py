@@ -72,6 +72,14 @@ def _method(name: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
 METHODS = ("farneback", "tvl1", "dis", "deepflow", "pcaflow")
 
 
+def raw(name: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """One method's flow function (frame t, frame t + 1) -> (H, W, 2)
+    float32, uncoded (the separability study measures its length)."""
+    if name not in METHODS:
+        raise ValueError(f"unknown flow method {name!r}; known: {', '.join(METHODS)}")
+    return _method(name)
+
+
 def hsv(flow: np.ndarray) -> np.ndarray:
     """(H, W, 2) flow -> (H, W, 3) uint8 RGB: hue = direction, value = length
     min-max scaled over the image, saturation 255."""

@@ -99,7 +99,8 @@ def coverage(h: int, w: int, cx: float, cy: float, radius: float, inside: Callab
 class _Scene:
     """One clip's static world and moving things, drawn frame by frame."""
 
-    def __init__(self, rng: np.random.Generator, factors: frozenset, frames: int, width: int, height: int, drone: bool):
+    def __init__(self, rng: np.random.Generator, factors: frozenset, frames: int, width: int, height: int, drone: bool,
+                 sizes: tuple = (2.0, 5.0), contrasts: tuple = (10.0, 40.0)):
         self.rng, self.factors, self.t_len, self.w, self.h = rng, factors, frames, width, height
         cw, ch = width + 2 * MARGIN, height + 2 * MARGIN
         self.yy, self.xx = np.mgrid[0:height, 0:width].astype(np.float64)
@@ -164,8 +165,8 @@ class _Scene:
             self.drone = dict(
                 p=np.array([rng.uniform(8, width - 8), rng.uniform(8, height - 8)]),
                 v=speed * np.array([np.cos(angle), np.sin(angle)]),
-                diameter=rng.uniform(2, 5),
-                contrast=rng.uniform(10, 40),
+                diameter=rng.uniform(*sizes),
+                contrast=rng.uniform(*contrasts),
                 sign=-1.0 if rng.random() < 0.75 else 1.0,
             )
 
@@ -271,12 +272,16 @@ class _Scene:
 
 
 def make_clip(rng: np.random.Generator, factors, frames: int, drone: bool = True,
-              width: int = WIDTH, height: int = HEIGHT) -> Clip:
+              width: int = WIDTH, height: int = HEIGHT, sizes: tuple = (2.0, 5.0),
+              contrasts: tuple = (10.0, 40.0)) -> Clip:
+    """A clip of `frames` frames with the factors on; the drone's diameter
+    (px) and contrast (gray levels) drawn uniformly from `sizes` and
+    `contrasts`."""
     factors = frozenset(factors)
     unknown = factors - set(FACTORS)
     if unknown:
         raise ValueError(f"unknown factors {sorted(unknown)}; known: {', '.join(FACTORS)}")
-    scene = _Scene(rng, factors, frames, width, height, drone)
+    scene = _Scene(rng, factors, frames, width, height, drone, sizes, contrasts)
     images, centers = zip(*(scene.frame(t) for t in range(frames)))
     contrast = scene.drone["contrast"] if scene.drone is not None else 0.0
     diameter = scene.drone["diameter"] if scene.drone is not None else 0.0

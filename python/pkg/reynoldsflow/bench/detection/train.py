@@ -1,0 +1,94 @@
+"""Training until the validation loss stops falling, and detection.
+
+The network, loss, target and channel standardisation are the downstream
+benchmark's (``downstream.detector``). Each step draws BATCH crops of CROP
+px from the training patches (POSITIVE of them around a drone), the same
+crops in the same order for every input of a seed; every `every` steps
+(EVERY by default) the mean focal loss over the whole validation patches
+is measured; training
+stops when it has not fallen below its best by 1 % for PATIENCE
+measurements (or at max_steps), and the weights of the best measurement
+are kept."""
+
+from __future__ import annotations
+
+import copy
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from ..downstream import detector
+
+CROP, BATCH, POSITIVE = 32, 32, 0.7
+EVERY, PATIENCE, MIN_DELTA = 50, 4, 0.01
+
+
+@dataclass(frozen=True)
+class Curve:
+    steps: list  # the steps at which the validation loss was measured
+    val_loss: list
+    train_loss: list  # mean training loss over the steps since the previous measurement
+    best_step: int
+    stopped_at: int
+    seconds: float
+
+
+def _crops(rng: np.random.Generator, centers: np.ndarray, size: int) -> np.ndarray:
+    """BATCH (patch, y0, x0) crops, a POSITIVE fraction around a drone."""
+    with_drone = np.flatnonzero(np.isfinite(centers[:, 0]))
+    out = np.zeros((BATCH, 3), np.int64)
+    for b in range(BATCH):
+        if len(with_drone) and rng.random() < POSITIVE:
+            i = int(rng.choice(with_drone))
+            x, y = np.rint(centers[i]).astype(int)
+            out[b] = (i, detector._around(rng, y, CROP, size), detector._around(rng, x, CROP, size))
+        else:
+            out[b] = (int(rng.integers(len(centers))), rng.integers(0, size - CROP + 1), rng.integers(0, size - CROP + 1))
+    return out
+
+
+def fit(x_train: np.ndarray, centers: np.ndarray, x_val: np.ndarray, val_centers: np.ndarray, seed: int,
+        max_steps: int, every: int = EVERY, lr: float = 3e-3):
+    """(model, standardiser, Curve) trained on uint8 (N, P, P, C) patches."""
+    start = time.perf_counter()
+    n, size, _, channels = x_train.shape
+    norm = detector.Standardise(x_train)
+    xs = norm(x_train)
+    ts = torch.from_numpy(detector.targets(centers, size, size))
+    xv, tv = norm(x_val), torch.from_numpy(detector.targets(val_centers, size, size))
+    torch.manual_seed(seed)
+    model = detector.Net(channels)
+    opt = torch.optim.Adam(model.parameters(), lr=lr)
+    rng = np.random.default_rng([seed, 591])
+    steps, val, train_l, pending = [], [], [], []
+    best, best_state, best_step, since = np.inf, None, 0, 0
+    step = 0
+    while step < max_steps:
+        crops = _crops(rng, centers, size)
+        xb = torch.stack([xs[i, :, y0 : y0 + CROP, x0 : x0 + CROP] for i, y0, x0 in crops])
+        tb = torch.stack([ts[i, y0 : y0 + CROP, x0 : x0 + CROP] for i, y0, x0 in crops])
+        model.train()
+        opt.zero_grad()
+        loss = detector.focal_loss(model(xb), tb)
+        loss.backward()
+        opt.step()
+        pending.append(loss.item())
+        step += 1
+        if step % every == 0 or step == max_steps:
+            model.eval()
+            with torch.inference_mode():
+                v = float(np.mean([detector.focal_loss(model(xv[i : i + 64]), tv[i : i + 64]).item()
+                                   for i in range(0, len(xv), 64)]))
+            steps.append(step), val.append(v), train_l.append(float(np.mean(pending)))
+            pending = []
+            if v < best * (1 - MIN_DELTA):
+                best, best_state, best_step, since = v, copy.deepcopy(model.state_dict()), step, 0
+            else:
+                since += 1
+                if since >= PATIENCE:
+                    break
+    if best_state is not None:
+        model.load_state_dict(best_state)
+    return model, norm, Curve(steps, val, train_l, best_step, step, time.perf_counter() - start)
