@@ -7,6 +7,7 @@ them the tests fail (they never skip into green).
 
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,16 @@ def run_cli(cli: Path, *args, **kwargs) -> subprocess.CompletedProcess:
     res = subprocess.run([str(cli), *map(str, args)], capture_output=True, text=True, env=env, **kwargs)
     assert res.returncode == 0, f"reynoldsflow {args}: {res.stderr}"
     return res
+
+
+def run_bench_quick(module: str, out: Path, threads: int, timeout: int) -> str:
+    """`python -m reynoldsflow.bench.MODULE --out OUT --quick` on THREADS
+    OpenMP threads; fail with its stderr if it fails. Returns its stdout."""
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    res = subprocess.run([sys.executable, "-m", f"reynoldsflow.bench.{module}", "--out", str(out), "--quick"],
+                         capture_output=True, text=True, env=env, timeout=timeout)
+    assert res.returncode == 0, res.stderr[-4000:]
+    return res.stdout
 
 
 def moving_frame(w: int, h: int, t: int, seed: int = 7) -> np.ndarray:

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import run_bench_quick
+
 from reynoldsflow.bench.detection import patches, run
 
 
@@ -27,11 +29,7 @@ def _csv(path):
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("detection")
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    res = subprocess.run([sys.executable, "-m", "reynoldsflow.bench.detection", "--out", str(out), "--quick"],
-                         capture_output=True, text=True, env=env, timeout=900)
-    assert res.returncode == 0, res.stderr[-4000:]
-    return out, res.stdout
+    return out, run_bench_quick("detection", out, threads=1, timeout=900)
 
 
 def test_quick_trains_every_input_on_both_families_and_every_seed(quick):

@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import run_bench_quick
+
 from reynoldsflow.bench.downstream import flow, inputs, metrics, report, run, scenes, stats
 
 QUICK = run.QUICK
@@ -34,11 +36,7 @@ PAIRED = re.compile(rf" ({NUM} \[{NUM}, {NUM}\]|n/r) (beats|tie|loses|n/r) ")
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("downstream")
-    env = dict(os.environ, OMP_NUM_THREADS="2")
-    res = subprocess.run([sys.executable, "-m", "reynoldsflow.bench.downstream", "--out", str(out), "--quick"],
-                         capture_output=True, text=True, env=env, timeout=900)
-    assert res.returncode == 0, res.stderr[-4000:]
-    return out, res.stdout
+    return out, run_bench_quick("downstream", out, threads=2, timeout=900)
 
 
 def _rows(path):

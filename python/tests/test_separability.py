@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import run_bench_quick
+
 from reynoldsflow.bench.separability import channels, measure, report
 
 H, W = 60, 80
@@ -135,11 +137,7 @@ def test_every_input_has_its_channels_named():
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("separability")
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    res = subprocess.run([sys.executable, "-m", "reynoldsflow.bench.separability", "--out", str(out), "--quick"],
-                         capture_output=True, text=True, env=env, timeout=600)
-    assert res.returncode == 0, res.stderr[-4000:]
-    return out, res.stdout
+    return out, run_bench_quick("separability", out, threads=1, timeout=600)
 
 
 def test_quick_run_has_every_input_channel_and_interval(quick):

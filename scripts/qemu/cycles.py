@@ -41,10 +41,14 @@ Prints `cycles=N cycles_per_px=X insns=N cpi=X` and the cycles by class.
 
 import argparse
 import bisect
+import os
 import re
 import subprocess
 import sys
 from collections import defaultdict
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from symbols import functions  # noqa: E402
 
 BRANCH_REFILL = 2
 
@@ -125,19 +129,6 @@ def classify(mnemonic, operands):
     if name.startswith("it"):
         return "it", 1, False
     return "alu", 1, False
-
-
-def functions(nm, elf):
-    """Sorted [(start, end, demangled name)] of the code symbols."""
-    out = subprocess.run([nm, "-C", "-S", "--defined-only", elf],
-                         check=True, capture_output=True, text=True).stdout
-    funcs = []
-    for raw in out.splitlines():
-        parts = raw.split(" ", 3)
-        if len(parts) == 4 and parts[2] in "tTwW":
-            start = int(parts[0], 16) & ~1  # Thumb bit
-            funcs.append((start, start + int(parts[1], 16), parts[3]))
-    return sorted(funcs)
 
 
 def function_of(funcs, starts, pc):

@@ -20,24 +20,13 @@ environment: run it with that python).
 import argparse
 import bisect
 import os
-import subprocess
 import sys
 from collections import defaultdict
 
 from elftools.elf.elffile import ELFFile
 
-
-def functions(nm, elf):
-    """Sorted [(start, end, demangled name)] of the code symbols."""
-    out = subprocess.run([nm, "-C", "-S", "--defined-only", elf],
-                         check=True, capture_output=True, text=True).stdout
-    funcs = []
-    for raw in out.splitlines():
-        parts = raw.split(" ", 3)
-        if len(parts) == 4 and parts[2] in "tTwW":
-            start = int(parts[0], 16) & ~1  # Thumb bit
-            funcs.append((start, start + int(parts[1], 16), parts[3]))
-    return sorted(funcs)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from symbols import functions  # noqa: E402
 
 
 def origin(die):
