@@ -11,9 +11,13 @@ scripts/bench-dataset, which builds the tool and the virtual environment.
    with --baseline BIN, the same rows of another build of the tool; and the
    OpenCV script a user would write instead (decode, DIS ultrafast, HSV
    image, cv2.imwrite PNG), in this process. Bytes per file for each.
-2. The JPEG files' mean absolute difference from the PNGs' bytes (the
+2. Encoder CPU per frame: this tool's PNG and JPEG (4:4:4, 4:2:0) as the
+   CPU each row of 1 spends beyond the same round's rgb24 run, beside
+   `cv2.imwrite` JPEG (quality 95, 4:4:4 and 4:2:0) and PNG writing the same
+   results (this tool's PNGs, decoded first) to files.
+3. The JPEG files' mean absolute difference from the PNGs' bytes (the
    representation), quality 95, over every result of the clip.
-3. `reynoldsflow dataset` on a tree of --items clips cut from the clip, at
+4. `reynoldsflow dataset` on a tree of --items clips cut from the clip, at
    1 thread and at all cores (--force: every item made each time), PNG and
    JPEG; with --baseline, the other build's beside it.
 
@@ -127,6 +131,17 @@ def opencv_script(clip, out_dir):
     return time.perf_counter() - t, cpu_seconds(resource.RUSAGE_SELF) - cpu
 
 
+def imwrite_cpu(images, out_dir, ext, params):
+    """CPU seconds of `cv2.imwrite` writing each of `images` (BGR arrays,
+    decoded beforehand) to a file of `out_dir`."""
+    shutil.rmtree(out_dir, ignore_errors=True)
+    os.makedirs(out_dir)
+    cpu = cpu_seconds(resource.RUSAGE_SELF)
+    for n, image in enumerate(images):
+        cv2.imwrite(os.path.join(out_dir, f"{n:06}.{ext}"), image, params)
+    return cpu_seconds(resource.RUSAGE_SELF) - cpu
+
+
 def summary(values):
     return statistics.median(values), min(values), max(values)
 
@@ -203,11 +218,36 @@ def main():
         cpu = 1000 * statistics.median(cpus[i]) / n
         print(f"| {label} | {rate:.0f} | {ratio} | {cpu:.2f} | {size} |")
 
+    # 2. The encoders alone, per frame: this tool's as the CPU its `--out DIR`
+    # run spends beyond the same round's rgb24 run (encoding and writing the
+    # file), beside cv2.imwrite writing the same results (this tool's PNGs,
+    # decoded first) to files.
+    print(f"\n### Encoder CPU per frame (640x480 results of the clip, {args.rounds} rounds)\n")
+    print("| encoder | CPU ms per frame | bytes per file |")
+    print("|---|---:|---:|")
+    for i, (label, files, _) in enumerate(rows):
+        if not files or "first" in label or label.startswith("OpenCV"):
+            continue
+        ref = base_ref if label.startswith("baseline") else 0
+        extra = [cpus[i][r] - cpus[ref][r] for r in range(args.rounds)]
+        size = bytes_per_file(out(files[1]), files[0]) / 1024
+        print(f"| reynoldsflow {label} | {1000 * statistics.median(extra) / pairs:.2f} | {size:.0f} KiB |")
+    images = [cv2.imread(png, cv2.IMREAD_COLOR) for png in files_of(out("png-fast"), ".png")]
+    for label, name, ext, params in [
+            ("`cv2.imwrite` JPEG quality 95, 4:4:4", "cv-jpg-444", "jpg",
+             [cv2.IMWRITE_JPEG_QUALITY, 95, cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444]),
+            ("`cv2.imwrite` JPEG quality 95, 4:2:0", "cv-jpg-420", "jpg",
+             [cv2.IMWRITE_JPEG_QUALITY, 95, cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_420]),
+            ("`cv2.imwrite` PNG (OpenCV's default compression)", "cv-png", "png", [])]:
+        cpu = statistics.median(imwrite_cpu(images, out(name), ext, params) for _ in range(args.rounds))
+        size = bytes_per_file(out(name), "." + ext) / 1024
+        print(f"| {label} | {1000 * cpu / len(images):.2f} | {size:.0f} KiB |")
+
     sizes = ", ".join(f"{level} {bytes_per_file(out('png-' + level), '.png', slow) / 1024:.0f} KiB"
                       for level in ["fast", "default", "best"])
     print(f"\nPNG bytes per file over the same first {slow} results: {sizes}")
 
-    # 2. JPEG error against the representation.
+    # 3. JPEG error against the representation.
     print("\n### JPEG (quality 95) against the PNGs' bytes, every result of the clip\n")
     pngs = files_of(out("png-fast"), ".png")
     for name in ["jpg-444", "jpg-420"]:
@@ -220,7 +260,7 @@ def main():
             count += a.size
         print(f"- {name[4:]}: mean absolute difference {total / count:.2f} levels of 255")
 
-    # 3. dataset on a tree, 1 thread and all cores.
+    # 4. dataset on a tree, 1 thread and all cores.
     tree = out("tree")
     make_tree(clip, tree, args.items, args.item_frames, pairs + 1)
     tree_pairs = args.items * (args.item_frames - 1)
