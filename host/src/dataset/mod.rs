@@ -22,7 +22,7 @@
 //! **Paths.** Items that would share an output folder, or whose folder lies
 //! in another item's side-output folder (`hsv/`, `v_c/`, `v_d/`, `v_R/`,
 //! whatever the flags), are refused before anything runs
-//! ([`side_folder_clash`], by the front end, which sees every item). Several
+//! (by the front end, which sees every item: the CLI's `dataset`). Several
 //! processes share one destination through [`Shard`]s, never by running
 //! the same job twice.
 //!
