@@ -13,7 +13,8 @@
 //!   hosts that find AVX2 and FMA at run time, chosen when a job is bound
 //!   (`Job::with_avx2`), held equal to the
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
-//!   in a layout of its own, which it names as its [`KernelSet::Sums`];
+//!   in a layout of its own (`blocked`, shared with `neon`), which it
+//!   names as its [`KernelSet::Sums`];
 //! - `neon`: the same layout and tail, and the bytes, in NEON lanes for
 //!   aarch64, fixed at compile time, held equal to the portable sums, tail
 //!   and bytes by `kernel_check` under `qemu-aarch64`.
@@ -27,6 +28,11 @@
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx2;
+#[cfg(any(
+    target_arch = "x86_64",
+    all(target_arch = "aarch64", target_feature = "neon")
+))]
+pub(crate) mod blocked;
 pub(crate) mod fpu;
 #[cfg(feature = "kernel-check")]
 pub mod kernel_check;
