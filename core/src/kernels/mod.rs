@@ -52,7 +52,7 @@ use crate::stages::{
     vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
-use crate::{ByteScale, ExtremesSink};
+use crate::{ByteScale, ExtremesSink, Pixels};
 
 /// The product rows of one structure row: the exact integer channels
 /// (`X², XY, Y²`) and the `f32` ones (`X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰`).
@@ -113,18 +113,14 @@ pub(crate) trait KernelSet: Copy {
         tail::tail_row(k, rows, out);
     }
 
-    /// The representation's bytes of a row segment (`sink::rgb_row`):
+    /// The representation's bytes of a row segment (`sink::rgb_row`; the
+    /// fields unread):
     /// [`sink::batched_rgb_row`](crate::sink::batched_rgb_row), whose
     /// remainder (all of it on the scalar boards) goes to
     /// [`KernelSet::rgb_pixels`].
     #[inline(always)]
-    fn rgb_row(
-        m_d: &[f32],
-        m_c: &[f32],
-        luma: &[u8],
-        scales: [&ByteScale; 2],
-        out: &mut [[u8; 3]],
-    ) {
+    fn rgb_row(pixels: Pixels<'_>, scales: [&ByteScale; 2], out: &mut [[u8; 3]]) {
+        let Pixels { m_d, m_c, luma, .. } = pixels;
         crate::sink::batched_rgb_row::<Self>(m_d, m_c, luma, scales, out);
     }
 

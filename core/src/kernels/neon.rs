@@ -58,13 +58,8 @@ impl KernelSet for Neon {
     /// [`RGB_STEP`] pixels a step in lanes ([`rgb_steps`]), the rest one
     /// at a time.
     #[inline(always)]
-    fn rgb_row(
-        m_d: &[f32],
-        m_c: &[f32],
-        luma: &[u8],
-        scales: [&ByteScale; 2],
-        out: &mut [[u8; 3]],
-    ) {
+    fn rgb_row(pixels: crate::Pixels<'_>, scales: [&ByteScale; 2], out: &mut [[u8; 3]]) {
+        let crate::Pixels { m_d, m_c, luma, .. } = pixels;
         let n = out.len().min(m_d.len()).min(m_c.len()).min(luma.len());
         let whole = n - n % RGB_STEP;
         let (Some((m_d, d_rest)), Some((m_c, c_rest)), Some((luma, l_rest)), Some((out, o_rest))) = (
