@@ -121,8 +121,7 @@ fn rgb_of(m_d: f32, m_c: f32, luma: u8, [scale_d, scale_c]: [&ByteScale; 2]) -> 
 /// a step in NEON lanes (`kernels/neon.rs`), one pixel at a time elsewhere.
 #[inline(always)]
 pub fn rgb_row(pixels: Pixels<'_>, scale_d: &ByteScale, scale_c: &ByteScale, out: &mut [[u8; 3]]) {
-    let scales = [scale_d, scale_c];
-    Native::rgb_row(pixels.m_d, pixels.m_c, pixels.luma, scales, out);
+    Native::rgb_row(pixels, [scale_d, scale_c], out);
 }
 
 /// [`rgb_row`] as the portable kernels write it (`KernelSet::rgb_row`'s

@@ -334,7 +334,6 @@ mod m4 {
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 mod neon {
     use super::{LEN, Values, tail_params};
-    use crate::ByteScale;
     use crate::kernels::neon::Neon;
     use crate::kernels::{KernelSet, OutputRow, Portable, SumRings};
     use crate::ring::take_rows;
@@ -342,6 +341,7 @@ mod neon {
     use crate::sink::portable_rgb_tail;
     use crate::stages::{DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS};
     use crate::tail::{TailConstants, TailOut};
+    use crate::{ByteScale, Pixels};
     use crate::{Config, ExtremesSink};
     use fixed::types::U16F16;
 
@@ -419,7 +419,13 @@ mod neon {
             let (m_d, m_c, luma) = (&m_d[..len], &m_c[..len], &luma[..len]);
             let scales = [&scale_d, &scale_c];
             portable_rgb_tail(m_d, m_c, luma, scales, &mut want[..len]);
-            Neon::rgb_row(m_d, m_c, luma, scales, &mut got[..len]);
+            let pixels = Pixels {
+                m_d,
+                m_c,
+                luma,
+                fields: None,
+            };
+            Neon::rgb_row(pixels, scales, &mut got[..len]);
             if want != got {
                 return Err("neon: rgb_row");
             }

@@ -13,7 +13,8 @@
 //!   hosts that find AVX2 and FMA at run time, chosen when a job is bound
 //!   (`Job::with_avx2`), held equal to the
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
-//!   in a layout of its own, which it names as its [`KernelSet::Sums`];
+//!   in a layout of its own (`blocked`, shared with `neon`), which it
+//!   names as its [`KernelSet::Sums`];
 //! - `neon`: the same layout and tail, and the bytes, in NEON lanes for
 //!   aarch64, fixed at compile time, held equal to the portable sums, tail
 //!   and bytes by `kernel_check` under `qemu-aarch64`.
@@ -27,6 +28,11 @@
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx2;
+#[cfg(any(
+    target_arch = "x86_64",
+    all(target_arch = "aarch64", target_feature = "neon")
+))]
+pub(crate) mod blocked;
 pub(crate) mod fpu;
 #[cfg(feature = "kernel-check")]
 pub mod kernel_check;
@@ -46,7 +52,7 @@ use crate::stages::{
     vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
-use crate::{ByteScale, ExtremesSink};
+use crate::{ByteScale, ExtremesSink, Pixels};
 
 /// The product rows of one structure row: the exact integer channels
 /// (`X², XY, Y²`) and the `f32` ones (`X·Dn′·2⁻²⁰`, `Y·Dn′·2⁻²⁰`).
@@ -107,18 +113,14 @@ pub(crate) trait KernelSet: Copy {
         tail::tail_row(k, rows, out);
     }
 
-    /// The representation's bytes of a row segment (`sink::rgb_row`):
+    /// The representation's bytes of a row segment (`sink::rgb_row`; the
+    /// fields unread):
     /// [`sink::batched_rgb_row`](crate::sink::batched_rgb_row), whose
     /// remainder (all of it on the scalar boards) goes to
     /// [`KernelSet::rgb_pixels`].
     #[inline(always)]
-    fn rgb_row(
-        m_d: &[f32],
-        m_c: &[f32],
-        luma: &[u8],
-        scales: [&ByteScale; 2],
-        out: &mut [[u8; 3]],
-    ) {
+    fn rgb_row(pixels: Pixels<'_>, scales: [&ByteScale; 2], out: &mut [[u8; 3]]) {
+        let Pixels { m_d, m_c, luma, .. } = pixels;
         crate::sink::batched_rgb_row::<Self>(m_d, m_c, luma, scales, out);
     }
 

@@ -4,17 +4,12 @@
 //! so the set is fixed at compile time: the firmware's and the host's
 //! [`Native`](super::Native).
 //!
-//! With it the engine keeps each sums ring (the three integer channels',
-//! the two `f32` ones') in blocks of [`BLOCK`] output columns: a block holds
-//! those columns of every channel of all five rows of the ring, row slot by
-//! row slot. One loop then does an output row's work: the vertical `G` of
-//! the five sums, the solve, both magnitudes and their extremes (or the
-//! fields, for sinks that read them), four pixels a step, reading each ring
-//! through one pointer at constant offsets (the loop is compiled once per
-//! slot of the window's first row), where neighbouring vectors load in
-//! pairs (`LDP`). The portable layout (a ring per channel) read 25 rows
-//! through 25 pointers and took the sums to memory and back between the
-//! vertical `G` and the tail.
+//! With it the engine keeps the structure sums in blocks of [`BLOCK`]
+//! output columns (`blocked`: the layout, the horizontal and vertical
+//! `G`), and one loop does an output row's tail, four pixels a step, where
+//! neighbouring vectors load in pairs (`LDP`). The portable layout (a ring
+//! per channel) read 25 rows through 25 pointers and took the sums to
+//! memory and back between the vertical `G` and the tail.
 //!
 //! The representation's bytes take sixteen pixels a step: both
 //! magnitudes' bytes in lanes and `fⁿ`'s, interleaved by one `ST3`, where
@@ -45,11 +40,11 @@ use core::arch::aarch64::{
     vsqrtq_f32, vst1q_f32, vst1q_s32, vst3q_u8, vsubq_f32,
 };
 
-use super::{KernelSet, OutputRow, Products, SumRings};
-use crate::ring::take;
-use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
-use crate::stages::{FLOAT_CHANNELS, INT_CHANNELS, Sample};
-use crate::tail::{TailConstants, TailOut};
+use super::KernelSet;
+use super::blocked::{
+    self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
+};
+use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
 
 /// The NEON set: the portable row kernels, the structure sums in blocks
@@ -58,18 +53,13 @@ use crate::{ByteScale, Extremes, ExtremesSink};
 pub(crate) struct Neon;
 
 impl KernelSet for Neon {
-    type Sums<'m> = BlockedSums<'m>;
+    type Sums<'m> = BlockedSums<'m, Neon>;
 
     /// [`RGB_STEP`] pixels a step in lanes ([`rgb_steps`]), the rest one
     /// at a time.
     #[inline(always)]
-    fn rgb_row(
-        m_d: &[f32],
-        m_c: &[f32],
-        luma: &[u8],
-        scales: [&ByteScale; 2],
-        out: &mut [[u8; 3]],
-    ) {
+    fn rgb_row(pixels: crate::Pixels<'_>, scales: [&ByteScale; 2], out: &mut [[u8; 3]]) {
+        let crate::Pixels { m_d, m_c, luma, .. } = pixels;
         let n = out.len().min(m_d.len()).min(m_c.len()).min(luma.len());
         let whole = n - n % RGB_STEP;
         let (Some((m_d, d_rest)), Some((m_c, c_rest)), Some((luma, l_rest)), Some((out, o_rest))) = (
@@ -129,69 +119,33 @@ fn rgb_steps([m_d, m_c]: [&[f32]; 2], luma: &[u8], scales: [[f32; 2]; 2], out: &
     }
 }
 
-/// The sums' rings in blocks (module doc): the integer channels' ring and
-/// the `f32` ones', each `SUM_DEPTH · K · cols` values for `K` channels
-/// (the memory of the portable layout's rings).
-pub(crate) struct BlockedSums<'m> {
-    ints: &'m mut [i32],
-    floats: &'m mut [f32],
-}
-
-impl<'m> SumRings<'m, Neon> for BlockedSums<'m> {
-    #[inline(always)]
-    fn carve(_: Neon, words: &mut &'m mut [i32], floats: &mut &'m mut [f32], cols: usize) -> Self {
-        Self {
-            ints: take(words, SUM_DEPTH * INTS * cols),
-            floats: take(floats, SUM_DEPTH * FLOATS * cols),
-        }
-    }
-
-    #[inline(always)]
-    fn store_row(&mut self, t: usize, (ints, floats): Products<'_, 'm>, n: usize) {
-        let ints = ints.each_ref().map(|row| &row[..]);
-        let floats = floats.each_ref().map(|row| &row[..]);
-        horizontal_sums(ints, floats, (self.ints, self.floats, t % SUM_DEPTH), n);
-    }
-
-    /// The vertical `G` is the tail's own, from the blocks.
-    #[inline(always)]
-    fn tail_row(&mut self, row: OutputRow<'_, 'm>, out: TailOut<'_>) -> Option<ExtremesSink> {
-        let OutputRow {
-            o, v, constants, ..
-        } = row;
-        let rows = BlockedRows {
-            ints: self.ints,
-            floats: self.floats,
-            first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
-            v,
-        };
-        Some(tail_row(constants, &rows, out))
-    }
-}
-
 /// Output columns a block: one NEON vector of each channel of each row.
 const BLOCK: usize = 4;
 
-/// Integer channels (`X², XY, Y²`) and `f32` channels (`X·Dn′`, `Y·Dn′`).
-const INTS: usize = INT_CHANNELS;
-const FLOATS: usize = FLOAT_CHANNELS;
+impl Blocked for Neon {
+    #[inline(always)]
+    fn horizontal_sums(
+        self,
+        ints: [&[i32]; INTS],
+        floats: [&[f32]; FLOATS],
+        rings: (&mut [i32], &mut [f32], usize),
+        n: usize,
+    ) {
+        // SAFETY: NEON is enabled for the whole build (the module's `cfg`).
+        unsafe { horizontal_sums_neon(ints, floats, rings, n) }
+    }
 
-/// Values a block of a ring of `K` channels: output column `4b + j` of
-/// channel `ch` of the row in slot `s` (window row `t` is in slot
-/// `t mod 5`) at `b · ring_block(K) + (s · K + ch) · 4 + j`. A ring of rows
-/// `cols` long per channel holds `⌈w / 4⌉` blocks (`4 ⌈w / 4⌉ < w + 14`).
-const fn ring_block(k: usize) -> usize {
-    SUM_DEPTH * k * BLOCK
-}
-
-/// Where lane 0 of channel `ch` of slot `slot` of block `b` lies.
-const fn at(k: usize, b: usize, slot: usize, ch: usize) -> usize {
-    b * ring_block(k) + (slot * k + ch) * BLOCK
-}
-
-/// Blocks of a row of `w` output columns.
-const fn blocks(w: usize) -> usize {
-    w.div_ceil(BLOCK)
+    #[inline(always)]
+    fn tail_row<const FIELDS: bool, const FIRST: usize>(
+        self,
+        k: &TailConstants,
+        rows: &BlockedRows<'_>,
+        m: [&mut [f32]; 2],
+        fields: [&mut [f32]; 4],
+    ) -> ExtremesSink {
+        // SAFETY: NEON is enabled for the whole build (the module's `cfg`).
+        unsafe { tail_row_neon::<FIELDS, FIRST>(k, rows, m, fields) }
+    }
 }
 
 /// `a + 4b + 6c + 4d + e`, as `4(b + c + d) + 2c + a + e` (exact in `i32`:
@@ -219,31 +173,8 @@ fn binomial_f(
     vaddq_f32(sum, vmulq_f32(c, vdupq_n_f32(6.0)))
 }
 
-/// The two kinds of sums in lanes, four values a vector: exact `i32`s
-/// ([`binomial`]) and `f32`s ([`binomial_f`]).
-trait Lanes: Sample {
-    type Vector: Copy;
-
-    /// Four lanes from `p`.
-    ///
-    /// # Safety
-    /// `p` points to four readable values.
-    unsafe fn load(p: *const Self) -> Self::Vector;
-
-    /// Four lanes to `p`.
-    ///
-    /// # Safety
-    /// `p` points to four writable values nothing else borrows.
-    unsafe fn store(p: *mut Self, v: Self::Vector);
-
-    /// The binomial of the four-lane vectors at the five taps.
-    ///
-    /// # Safety
-    /// Each tap points to four readable values.
-    unsafe fn binomial_at(taps: [*const Self; 5]) -> Self::Vector;
-}
-
-impl Lanes for i32 {
+/// Exact `i32` sums, four a vector ([`binomial`]).
+impl Lanes<BLOCK> for i32 {
     type Vector = int32x4_t;
 
     #[inline]
@@ -262,21 +193,13 @@ impl Lanes for i32 {
 
     #[inline]
     #[target_feature(enable = "neon")]
-    unsafe fn binomial_at([a, b, c, d, e]: [*const i32; 5]) -> int32x4_t {
-        // SAFETY: the caller's.
-        unsafe {
-            binomial(
-                Self::load(a),
-                Self::load(b),
-                Self::load(c),
-                Self::load(d),
-                Self::load(e),
-            )
-        }
+    unsafe fn binomial_lanes([a, b, c, d, e]: [int32x4_t; 5]) -> int32x4_t {
+        binomial(a, b, c, d, e)
     }
 }
 
-impl Lanes for f32 {
+/// `f32` sums, four a vector ([`binomial_f`]).
+impl Lanes<BLOCK> for f32 {
     type Vector = float32x4_t;
 
     #[inline]
@@ -295,191 +218,22 @@ impl Lanes for f32 {
 
     #[inline]
     #[target_feature(enable = "neon")]
-    unsafe fn binomial_at([a, b, c, d, e]: [*const f32; 5]) -> float32x4_t {
-        // SAFETY: the caller's.
-        unsafe {
-            binomial_f(
-                Self::load(a),
-                Self::load(b),
-                Self::load(c),
-                Self::load(d),
-                Self::load(e),
-            )
-        }
+    unsafe fn binomial_lanes([a, b, c, d, e]: [float32x4_t; 5]) -> float32x4_t {
+        binomial_f(a, b, c, d, e)
     }
 }
 
-/// The horizontal `G` of block `b` of `K` product rows (taps from window
-/// column `first`) into their channels' lanes of slot `slot` of a ring.
-///
-/// # Safety
-/// Every row holds `first + 8` values, and block `b` lies in the ring.
-#[inline]
-#[target_feature(enable = "neon")]
-unsafe fn row_sums<T: Lanes, const K: usize>(
-    rows: &[&[T]; K],
-    first: usize,
-    ring: *mut T,
-    (b, slot): (usize, usize),
-) {
-    for (ch, row) in rows.iter().enumerate() {
-        let p = row.as_ptr();
-        // SAFETY: the caller's.
-        unsafe {
-            let sum = T::binomial_at(core::array::from_fn(|t| p.add(first + t)));
-            T::store(ring.add(at(K, b, slot, ch)), sum);
-        }
-    }
-}
-
-/// The vertical `G` of block `b` of channel `ch` of a ring of `K`
-/// channels, from the five rows from slot `first` on.
-///
-/// # Safety
-/// Block `b` lies in the ring.
-#[inline]
-#[target_feature(enable = "neon")]
-unsafe fn column_sum<T: Lanes, const K: usize>(
-    ring: *const T,
-    (b, first, ch): (usize, usize, usize),
-) -> T::Vector {
-    let tap = |k: usize| at(K, b, (first + k) % SUM_DEPTH, ch);
-    // SAFETY: the caller's.
-    unsafe { T::binomial_at(core::array::from_fn(|k| ring.add(tap(k)))) }
-}
-
-/// The horizontal `G` of the five products of a row (window columns,
-/// valid on `[5, n − 5)`) into slot `slot` of both sums rings. The last
-/// block's lanes past the row's last output column get sums of columns
-/// past the window (bounded like any sum: the rows there hold earlier
-/// products or zeros), unless those would lie past the rows' ends: then
-/// those lanes keep what they held.
-#[inline(always)]
-fn horizontal_sums(
-    ints: [&[i32]; INTS],
-    floats: [&[f32]; FLOATS],
-    rings: (&mut [i32], &mut [f32], usize),
-    n: usize,
-) {
-    // SAFETY: NEON is enabled for the whole build (the module's `cfg`).
-    unsafe { horizontal_sums_neon(ints, floats, rings, n) }
-}
-
+/// [`blocked::horizontal_sums`] in NEON lanes.
 #[inline(never)]
 #[target_feature(enable = "neon")]
 fn horizontal_sums_neon(
     ints: [&[i32]; INTS],
     floats: [&[f32]; FLOATS],
-    (int_ring, float_ring, slot): (&mut [i32], &mut [f32], usize),
+    rings: (&mut [i32], &mut [f32], usize),
     n: usize,
 ) {
-    let nb = blocks(n.saturating_sub(2 * HALO));
-    let slot = slot % SUM_DEPTH;
-    let (Some(int_ring), Some(float_ring)) = (
-        int_ring.get_mut(..nb * ring_block(INTS)),
-        float_ring.get_mut(..nb * ring_block(FLOATS)),
-    ) else {
-        return;
-    };
-    // Tap `t` of lane `j` of block `b` is window column `HALO − 2 + 4b + j
-    // + t`: the block reads `4b + 13` columns of every product row. The
-    // blocks that fit in all of them run in lanes.
-    let len = ints
-        .iter()
-        .map(|r| r.len())
-        .chain(floats.iter().map(|r| r.len()))
-        .min();
-    let reach = HALO - 2 + BLOCK + 4;
-    let whole = match len {
-        Some(len) if len >= reach => ((len - reach) / BLOCK + 1).min(nb),
-        _ => 0,
-    };
-    let (int_out, float_out) = (int_ring.as_mut_ptr(), float_ring.as_mut_ptr());
-    for b in 0..whole {
-        let first = HALO - 2 + BLOCK * b;
-        // SAFETY: `first + 8 ≤ len` (`whole`), and block `b < nb` lies in
-        // both rings.
-        unsafe {
-            row_sums(&ints, first, int_out, (b, slot));
-            row_sums(&floats, first, float_out, (b, slot));
-        }
-    }
-    // A last block whose taps would pass a row's end: its lanes one at a
-    // time, those whose taps lie in the row.
-    for b in whole..nb {
-        let first = HALO - 2 + BLOCK * b;
-        scalar_sums(&ints, first, int_ring, (b, slot));
-        scalar_sums(&floats, first, float_ring, (b, slot));
-    }
-}
-
-/// [`row_sums`] one lane at a time, the lanes whose five taps lie in the
-/// row (`Sample::binomial`, the portable sum); the others keep what they
-/// held.
-#[inline(never)]
-fn scalar_sums<T: Sample, const K: usize>(
-    rows: &[&[T]; K],
-    first: usize,
-    ring: &mut [T],
-    (b, slot): (usize, usize),
-) {
-    for (ch, row) in rows.iter().enumerate() {
-        let out = ring
-            .get_mut(at(K, b, slot, ch)..)
-            .and_then(|r| r.first_chunk_mut::<BLOCK>());
-        for (j, out) in out.into_iter().flatten().enumerate() {
-            if let Some(&[a, b, c, d, e]) = row.get(first + j..).and_then(|t| t.first_chunk()) {
-                *out = T::binomial(a, b, c, d, e);
-            }
-        }
-    }
-}
-
-/// What one output row's tail reads: both sums rings, the slot of the
-/// first of the five rows centred on it, and `V` (window columns).
-struct BlockedRows<'a> {
-    /// The integer sums' ring.
-    ints: &'a [i32],
-    /// The `f32` sums' ring.
-    floats: &'a [f32],
-    /// The slot of the row two above the output row (below `SUM_DEPTH`).
-    first_slot: usize,
-    /// `V` (x, y) of the row.
-    v: [&'a [i32]; 2],
-}
-
-/// The vertical `G` of the blocked sums centred on an output row, the solve
-/// and the magnitudes (and fields), four pixels a step, for the `w` output
-/// columns of a window of `n` (the outputs' length; shorter rows write
-/// nothing).
-#[inline(always)]
-fn tail_row(k: &TailConstants, rows: &BlockedRows<'_>, out: TailOut<'_>) -> ExtremesSink {
-    let TailOut { m, fields } = out;
-    match fields {
-        None => by_slot::<false>(k, rows, m, [&mut [], &mut [], &mut [], &mut []]),
-        Some(fields) => by_slot::<true>(k, rows, m, fields),
-    }
-}
-
-/// [`tail_row_neon`] compiled for the slot of the output row's first sums
-/// row, so that every load is at a constant offset from one pointer a ring.
-#[inline(always)]
-fn by_slot<const FIELDS: bool>(
-    k: &TailConstants,
-    rows: &BlockedRows<'_>,
-    m: [&mut [f32]; 2],
-    fields: [&mut [f32]; 4],
-) -> ExtremesSink {
-    // SAFETY: NEON is enabled for the whole build (the module's `cfg`).
-    unsafe {
-        match rows.first_slot {
-            0 => tail_row_neon::<FIELDS, 0>(k, rows, m, fields),
-            1 => tail_row_neon::<FIELDS, 1>(k, rows, m, fields),
-            2 => tail_row_neon::<FIELDS, 2>(k, rows, m, fields),
-            3 => tail_row_neon::<FIELDS, 3>(k, rows, m, fields),
-            _ => tail_row_neon::<FIELDS, 4>(k, rows, m, fields),
-        }
-    }
+    // SAFETY: NEON is enabled here.
+    unsafe { blocked::horizontal_sums::<BLOCK>(ints, floats, rings, n) }
 }
 
 /// The constants of the tail in lanes.
@@ -490,6 +244,7 @@ struct Constants {
     v_c: float32x4_t,
 }
 
+/// [`Blocked::tail_row`] in NEON lanes.
 #[inline(never)]
 #[target_feature(enable = "neon")]
 fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
@@ -499,28 +254,17 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
     fields: [&mut [f32]; 4],
 ) -> ExtremesSink {
     let w = m_d.len();
-    let (nb, whole) = (blocks(w), w / BLOCK);
-    let BlockedRows {
-        ints, floats, v, ..
-    } = rows;
-    let [vx, vy] = v.map(|row| row.get(HALO..HALO + w).unwrap_or(&[]));
-    let fields_len = if FIELDS { w } else { 0 };
-    if ints.len() < nb * ring_block(INTS)
-        || floats.len() < nb * ring_block(FLOATS)
-        || vx.len() < w
-        || vy.len() < w
-        || m_c.len() < w
-        || fields.iter().any(|row| row.len() < fields_len)
-    {
+    let (nb, whole) = (blocks::<BLOCK>(w), w / BLOCK);
+    let Some([vx, vy]) = blocked::tail_v::<FIELDS, BLOCK>(rows, w, m_c, &fields) else {
         return ExtremesSink::default();
-    }
+    };
     let c = Constants {
         lambda4: vdupq_n_s32(k.lambda4),
         det_floor: vdupq_n_f32(k.units.det_floor),
         v_d: vdupq_n_f32(k.units.v_d),
         v_c: vdupq_n_f32(k.units.v_c),
     };
-    let (ints, floats) = (ints.as_ptr(), floats.as_ptr());
+    let (ints, floats) = (rows.ints.as_ptr(), rows.floats.as_ptr());
     let [v_c_x, v_c_y, v_d_x, v_d_y] = fields;
     let out = [
         m_d.as_mut_ptr(),
@@ -539,9 +283,9 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
         let at = BLOCK * b;
         // SAFETY: block `b < nb` lies in both rings, and `at + 4 ≤ w`
         // in `V` and the outputs (the fields when `FIELDS`): the lengths
-        // checked above.
+        // `tail_v` checked; NEON is enabled here.
         unsafe {
-            let (abc, pq) = block_sums::<FIRST>(ints, floats, b);
+            let (abc, pq) = blocked::block_sums::<FIRST, BLOCK>(ints, floats, b);
             let v = [
                 i32::load(vx.as_ptr().add(at)),
                 i32::load(vy.as_ptr().add(at)),
@@ -567,19 +311,15 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
         // The last, partial block: `V` past the row's end reads as 0, and
         // only the row's columns are written.
         let at = BLOCK * whole;
-        let padded = |row: &[i32]| {
-            let mut lanes = [0; BLOCK];
-            for (l, &x) in lanes.iter_mut().zip(row.get(at..).unwrap_or(&[])) {
-                *l = x;
-            }
-            lanes
-        };
-        let (vx, vy) = (padded(vx), padded(vy));
+        let (vx, vy) = (
+            blocked::padded::<BLOCK>(vx, at),
+            blocked::padded::<BLOCK>(vy, at),
+        );
         let mut local = [[0.0f32; BLOCK]; 6];
         // SAFETY: block `whole < nb` lies in both rings; `V` and the
-        // results are local arrays of four lanes.
+        // results are local arrays of four lanes; NEON is enabled here.
         unsafe {
-            let (abc, pq) = block_sums::<FIRST>(ints, floats, whole);
+            let (abc, pq) = blocked::block_sums::<FIRST, BLOCK>(ints, floats, whole);
             let v = [i32::load(vx.as_ptr()), i32::load(vy.as_ptr())];
             let px = pixels(&c, abc, pq, v);
             for (row, lanes) in local.iter_mut().zip(outputs::<FIELDS>(&c, &px)) {
@@ -587,36 +327,10 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
             }
         }
         let rows = [m_d, m_c, v_c_x, v_c_y, v_d_x, v_d_y];
-        for (row, lanes) in rows.into_iter().zip(&local) {
-            for (o, &x) in row.get_mut(at..).unwrap_or(&mut []).iter_mut().zip(lanes) {
-                *o = x;
-            }
-        }
-        for (extremes, lanes) in extremes.iter_mut().zip(&local) {
-            extremes.add_all(lanes.get(..w - at).unwrap_or(&[]));
-        }
+        blocked::finish_partial(rows, &local, (at, w), &mut extremes);
     }
     let [m_d, m_c] = extremes;
     ExtremesSink { m_d, m_c }
-}
-
-/// The vertical `G` of block `b` of each channel: `a, b, c` and `p, q`,
-/// from the five rows of the rings from slot `FIRST` on.
-///
-/// # Safety
-/// Block `b` lies in both rings.
-#[inline]
-#[target_feature(enable = "neon")]
-unsafe fn block_sums<const FIRST: usize>(
-    ints: *const i32,
-    floats: *const f32,
-    b: usize,
-) -> ([int32x4_t; INTS], [float32x4_t; FLOATS]) {
-    // SAFETY: the caller's.
-    let int = |ch| unsafe { column_sum::<i32, INTS>(ints, (b, FIRST, ch)) };
-    // SAFETY: the caller's.
-    let float = |ch| unsafe { column_sum::<f32, FLOATS>(floats, (b, FIRST, ch)) };
-    ([int(0), int(1), int(2)], [float(0), float(1)])
 }
 
 /// One block's results: the magnitudes, and the fields' parts.
@@ -635,8 +349,8 @@ struct Pixels {
 #[target_feature(enable = "neon")]
 fn pixels(
     c: &Constants,
-    [a, b, cc]: [int32x4_t; 3],
-    [p, q]: [float32x4_t; 2],
+    [a, b, cc]: [IntLanes<BLOCK>; INTS],
+    [p, q]: [FloatLanes<BLOCK>; FLOATS],
     v: [int32x4_t; 2],
 ) -> Pixels {
     let a4 = vcvtq_f32_s32(vaddq_s32(vshlq_n_s32::<2>(a), c.lambda4));
