@@ -11,16 +11,15 @@
 //! and one destination; `--files-from` takes the items from a manifest;
 //! each item's record goes to stdout or `--status FILE` as a JSON line.
 
-use std::collections::HashMap;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use reynoldsflow_host::dataset::{
-    Item, ItemRunner, ItemSettings, Outcome, Shard, StatusLog, discover, manifest, record,
-    shard::parse_shard, shard_key, side_folder_owner,
+    Item, ItemRunner, ItemSettings, Outcome, Shard, StatusLog, clashes, discover, manifest, record,
+    shard::parse_shard, shard_key,
 };
 use reynoldsflow_host::sequence::input_error;
 use reynoldsflow_host::{HostError, pipeline, workers};
@@ -308,45 +307,20 @@ fn find_items(args: &DatasetArgs) -> Result<Vec<Item>, HostError> {
 }
 
 /// The items of `shard`, each with its outcome already decided (`Some`:
-/// it clashes with another item) or still to run (`None`); `sides`:
-/// whether items write side-output folders (folders, not WebDataset).
+/// it clashes with another item, [`clashes`]) or still to run (`None`);
+/// `sides`: whether items write side-output folders (folders, not
+/// WebDataset).
 fn shard_items(
     args: &DatasetArgs,
     shard: Shard,
     all: &[Item],
     sides: bool,
 ) -> (Vec<Item>, Vec<Option<Outcome>>) {
-    // Two items writing one folder would mix their outputs: refuse the later
-    // one, judged on every item so that all shards agree. So would an item
-    // whose folder lies in another's side-output folder (`x/hsv.y4m` beside
-    // `x.y4m`), whatever the flags of this run or an earlier one: refuse
-    // the one inside.
-    let by_folder: HashMap<&Path, &Item> = all.iter().rev().map(|o| (o.rel.as_path(), o)).collect();
-    let mut items = Vec::new();
-    let mut outcomes: Vec<Option<Outcome>> = Vec::new();
-    for (i, item) in all.iter().enumerate() {
-        if !shard.contains(&shard_key(&args.src, item)) {
-            continue;
-        }
-        let folder = args.dst.join(&item.rel).display().to_string();
-        let clash = all[..i].iter().find(|o| o.rel == item.rel).map(|o| {
-            format!(
-                "its output folder {folder} is also the output of {}; rename one",
-                o.src.display()
-            )
-        });
-        let side = || {
-            let (owner, side) = side_folder_owner(&item.rel, &by_folder).filter(|_| sides)?;
-            Some(format!(
-                "its output folder {folder} lies in {side}/, where {}'s {side} outputs go \
-                 (hsv/, v_c/, v_d/ and v_R/ are kept for side outputs, whatever the flags); rename one",
-                owner.src.display()
-            ))
-        };
-        outcomes.push(clash.or_else(side).map(Outcome::Failed));
-        items.push(item.clone());
-    }
-    (items, outcomes)
+    all.iter()
+        .zip(clashes(all, &args.dst, sides))
+        .filter(|(item, _)| shard.contains(&shard_key(&args.src, item)))
+        .map(|(item, clash)| (item.clone(), clash.map(Outcome::Failed)))
+        .unzip()
 }
 
 /// What the workers of one `dataset` run share.

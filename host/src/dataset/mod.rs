@@ -303,17 +303,48 @@ pub fn listed<'a>(
     Ok(items)
 }
 
-/// The item of `by_folder` (output folders to items) whose side-output
-/// folder (`hsv/`, `v_c/`, `v_d/`, `v_R/`, written under any flags) holds
-/// the output folder `rel`, with that folder's name: `x/hsv.y4m` beside
-/// `x.y4m`, or a frame folder `x/v_R/` in the frame folder `x/`.
-pub fn side_folder_owner<'a>(
-    rel: &Path,
-    by_folder: &HashMap<&Path, &'a Item>,
-) -> Option<(&'a Item, &'static str)> {
+/// Why each item of `all` may not run, or `None`: two items writing one
+/// output folder would mix their outputs (the later is refused), and so
+/// would an item whose folder lies in another's side-output folder
+/// (`x/hsv.y4m` beside `x.y4m`, a frame folder `x/v_R/` in the frame folder
+/// `x/`) when `sides` (folder mode: `hsv/`, `v_c/`, `v_d/`, `v_R/` are kept
+/// for side outputs whatever the flags of this run or an earlier one; the
+/// one inside is refused). Judged on every item, so that all shards agree;
+/// `dst`: where the output folders go, for the messages.
+pub fn clashes(all: &[Item], dst: &Path, sides: bool) -> Vec<Option<String>> {
+    // The first item of each output folder.
+    let mut first: HashMap<&Path, usize> = HashMap::with_capacity(all.len());
+    for (i, item) in all.iter().enumerate() {
+        first.entry(item.rel.as_path()).or_insert(i);
+    }
+    all.iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let folder = dst.join(&item.rel).display().to_string();
+            let owner = first[item.rel.as_path()];
+            if owner != i {
+                return Some(format!(
+                    "its output folder {folder} is also the output of {}; rename one",
+                    all[owner].src.display()
+                ));
+            }
+            let (owner, side) = side_folder_owner(&item.rel, &first).filter(|_| sides)?;
+            Some(format!(
+                "its output folder {folder} lies in {side}/, where {}'s {side} outputs go \
+                 (hsv/, v_c/, v_d/ and v_R/ are kept for side outputs, whatever the flags); rename one",
+                all[owner].src.display()
+            ))
+        })
+        .collect()
+}
+
+/// The item of `first` (output folders to items' indices) whose
+/// side-output folder holds the output folder `rel`, with that folder's
+/// name.
+fn side_folder_owner(rel: &Path, first: &HashMap<&Path, usize>) -> Option<(usize, &'static str)> {
     let mut child = rel;
     while let Some(parent) = child.parent() {
-        if let Some(owner) = by_folder.get(parent) {
+        if let Some(&owner) = first.get(parent) {
             let name = child.file_name().and_then(|n| n.to_str());
             if let Some(side) = commit::SIDE_FOLDERS.iter().find(|s| Some(**s) == name) {
                 return Some((owner, side));
@@ -581,4 +612,48 @@ pub fn convert(
         &outcome,
         started.elapsed().as_secs_f64(),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn item(src: &str, rel: &str, frames: bool) -> Item {
+        Item {
+            src: PathBuf::from(src),
+            rel: PathBuf::from(rel),
+            frames,
+        }
+    }
+
+    #[test]
+    fn clashes_refuse_a_shared_folder_and_a_folder_in_a_side_folder() {
+        let all = [
+            item("s/x.y4m", "x", false),
+            item("s/x/hsv.y4m", "x/hsv", false),
+            item("s/f", "f", true),
+            item("s/f/v_R", "f/v_R", true),
+            item("s/f/keep.y4m", "f/keep", false),
+            item("s/x.mp4", "x", false),
+        ];
+        let found = clashes(&all, Path::new("d"), true);
+        let refused: Vec<usize> = (0..all.len()).filter(|&i| found[i].is_some()).collect();
+        assert_eq!(refused, [1, 3, 5], "{found:?}");
+        assert!(
+            found[1]
+                .as_deref()
+                .unwrap()
+                .contains("lies in hsv/, where s/x.y4m's")
+        );
+        assert!(
+            found[5]
+                .as_deref()
+                .unwrap()
+                .contains("also the output of s/x.y4m")
+        );
+        // WebDataset writes no side folders: only the shared folder clashes.
+        let found = clashes(&all, Path::new("d"), false);
+        let refused: Vec<usize> = (0..all.len()).filter(|&i| found[i].is_some()).collect();
+        assert_eq!(refused, [5], "{found:?}");
+    }
 }
