@@ -693,7 +693,10 @@ fn convert<'py>(
 /// or of that list of paths (each relative to src, or absolute inside it);
 /// with dst inside src, dst is not searched. With shard=(i, n), only those
 /// `reynoldsflow dataset --shard i/n` takes (the same hash of each item's
-/// path relative to src, computed by the same code).
+/// path relative to src, computed by the same code). An item that
+/// `reynoldsflow dataset` would refuse (its output folder another's, or in
+/// another's side-output folder `hsv/`, `v_c/`, `v_d/`, `v_R/`) raises
+/// ValueError naming it.
 #[pyfunction]
 #[pyo3(signature = (src, *, files_from=None, dst=None, shard=None))]
 fn dataset_items(
@@ -723,17 +726,30 @@ fn dataset_items(
                         .map(|(n, p)| (format!("item {n}"), p.as_path())),
                 ),
                 None => {
-                    let skip = dst.and_then(|d| std::fs::canonicalize(d).ok());
+                    let skip = dst.as_deref().and_then(|d| std::fs::canonicalize(d).ok());
                     dataset::discover(&src, skip.as_deref())
                 }
             })
         })
         .map_err(Failure::into_pyerr)?;
-    Ok(items
-        .into_iter()
-        .filter(|i| shard.contains(&dataset::shard_key(&src, i)))
-        .map(|i| (i.src.display().to_string(), i.rel.display().to_string()))
-        .collect())
+    let dst_shown = dst.unwrap_or_else(|| "DST".into());
+    let mut taken = Vec::new();
+    for (item, clash) in items.iter().zip(dataset::clashes(&items, &dst_shown, true)) {
+        if !shard.contains(&dataset::shard_key(&src, item)) {
+            continue;
+        }
+        if let Some(reason) = clash {
+            return Err(value_error(format!(
+                "dataset_items(): {}: {reason}",
+                item.src.display()
+            )));
+        }
+        taken.push((
+            item.src.display().to_string(),
+            item.rel.display().to_string(),
+        ));
+    }
+    Ok(taken)
 }
 
 /// `files_from=`: a manifest's path, or the paths themselves.

@@ -68,6 +68,20 @@ def test_convert_makes_what_dataset_makes(cli, tmp_path):
     assert rf.convert(s, by_py / rel, force=True)["status"] == "done"
 
 
+def test_dataset_items_refuse_what_dataset_refuses(tmp_path):
+    # An item in another's side-output folder, or two items writing one
+    # folder: the CLI refuses them, so the listing does too, naming them.
+    src = tmp_path / "src"
+    (src / "x").mkdir(parents=True)
+    write_y4m(src / "x.y4m", clip(3))
+    write_y4m(src / "x" / "hsv.y4m", clip(3))
+    with pytest.raises(ValueError, match=r"hsv\.y4m: its output folder DST/x/hsv lies in hsv/"):
+        rf.dataset_items(src)
+    (src / "x" / "hsv.y4m").unlink()
+    write_y4m(src / "x.mp4.y4m", clip(3))  # another name, another folder: taken
+    assert [rel for _, rel in rf.dataset_items(src)] == ["x", "x.mp4"]
+
+
 def test_dataset_items_follow_a_manifest(tmp_path):
     src = tmp_path / "src"
     source_tree(src)
