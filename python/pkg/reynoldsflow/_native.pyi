@@ -291,7 +291,9 @@ def dataset_items(
     files_from, those of that manifest (one path relative to src per line)
     or of that list of paths (each relative to src, or absolute inside it);
     a dst inside src is not searched. With shard=(i, n), only the items
-    ``reynoldsflow dataset --shard i/n`` takes (the same hash)."""
+    ``reynoldsflow dataset --shard i/n`` takes (the same hash). An item
+    that command would refuse (its output folder another's, or inside
+    another's ``hsv/``, ``v_c/``, ``v_d/``, ``v_R/``) raises ValueError."""
 
 class FrameReader:
     """The frames of one video or frame folder (read_frames): an iterator
