@@ -24,6 +24,7 @@ pub mod atomic;
 mod avx2_bytes;
 pub mod captured;
 pub mod compare;
+pub mod content_hash;
 pub mod cues;
 pub mod dataset;
 mod decoder_guard;

@@ -26,13 +26,13 @@
 
 use std::collections::BTreeSet;
 use std::fs;
-use std::io::Read;
 use std::path::{Component, Path};
 
 use serde_json::{Value, json};
 use xxhash_rust::xxh3::Xxh3;
 
 use crate::HostError;
+use crate::content_hash::{hash_bytes, hash_file};
 use crate::sequence::folder::is_frame_file;
 
 use super::Item;
@@ -45,26 +45,6 @@ pub const JOURNAL: &str = ".reynoldsflow-commit";
 pub const STAGING: &str = ".reynoldsflow-new";
 /// The sub-folders of an item's folder its side outputs go to.
 pub const SIDE_FOLDERS: [&str; 4] = ["hsv", "v_c", "v_d", "v_R"];
-
-/// XXH3-128 of `bytes`, as 32 hex digits.
-pub fn hash_bytes(bytes: &[u8]) -> String {
-    format!("{:032x}", xxhash_rust::xxh3::xxh3_128(bytes))
-}
-
-/// XXH3-128 of the file at `path`, read in blocks of 1 MiB.
-pub fn hash_file(path: &Path) -> Result<String, HostError> {
-    let mut file = fs::File::open(path).map_err(|e| HostError::io(path, e))?;
-    let mut hasher = Xxh3::new();
-    let mut block = vec![0; 1 << 20];
-    loop {
-        let n = file.read(&mut block).map_err(|e| HostError::io(path, e))?;
-        if n == 0 {
-            break;
-        }
-        hasher.update(&block[..n]);
-    }
-    Ok(format!("{:032x}", hasher.digest128()))
-}
 
 /// The source's identity by content: a video's hash, or a frame folder's
 /// number of frames and the hash of every frame file's name, size and hash.

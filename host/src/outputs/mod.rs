@@ -560,7 +560,7 @@ pub struct Written {
     pub path: String,
     /// Bytes.
     pub size: u64,
-    /// XXH3-128 of the bytes, hex ([`crate::dataset::commit::hash_bytes`]).
+    /// XXH3-128 of the bytes, hex ([`crate::content_hash::hash_bytes`]).
     pub hash: String,
 }
 
@@ -757,7 +757,7 @@ impl Folder {
             written.push(Written {
                 path: path.join("/"),
                 size: bytes.len() as u64,
-                hash: crate::dataset::commit::hash_bytes(bytes),
+                hash: crate::content_hash::hash_bytes(bytes),
             });
         }
         Ok(())
