@@ -34,9 +34,12 @@ are taken as hidden by the prefetch buffer). A model, not a measurement:
 no bus contention, no FPU register dependencies (the M4's VFP pipelines
 back-to-back operations), no interrupts.
 
-  cycles.py --objdump llvm-objdump [--mcpu cortex-m4] ELF WPROFILE PIXELS [--flash-ws N]
+  cycles.py --objdump llvm-objdump [--mcpu cortex-m4] [--nm llvm-nm [--parts [--min P]]]
+            ELF WPROFILE PIXELS [--flash-ws N]
 
-Prints `cycles=N cycles_per_px=X insns=N cpi=X` and the cycles by class.
+Prints `cycles=N cycles_per_px=X insns=N cpi=X`, and to stderr the cycles
+by class, by function (`--nm`) and by inlined source function (`--parts`:
+the tree of scripts/qemu/profile.py, whose DWARF walk needs pyelftools).
 """
 
 import argparse
@@ -148,6 +151,7 @@ def model(insns, profile, flash_ws, funcs=None):
         entry[1] += int(taken)
     by_class = defaultdict(lambda: [0, 0])  # class -> [instructions, cycles]
     by_function = defaultdict(lambda: [0, 0])
+    by_pc = {}  # pc -> [instructions, cycles]
     starts = [f[0] for f in funcs or []]
     total_insns = total_cycles = 0
     addresses = sorted(insns)
@@ -178,9 +182,10 @@ def model(insns, profile, flash_ws, funcs=None):
             f = by_function[function_of(funcs, starts, pc)]
             f[0] += count
             f[1] += c
+        by_pc[pc] = [count, c]
         total_insns += count
         total_cycles += c
-    return total_insns, total_cycles, by_class, by_function
+    return total_insns, total_cycles, by_class, by_function, by_pc
 
 
 def main():
@@ -189,12 +194,18 @@ def main():
     ap.add_argument("--flash-ws", type=int, default=0)
     ap.add_argument("--nm", help="llvm-nm: also the cycles by function")
     ap.add_argument("--mcpu", default="cortex-m4", help="the core, for the disassembler")
+    ap.add_argument("--parts", action="store_true",
+                    help="with --nm: also the instructions and cycles by function and inlined source "
+                         "function (profile.py's tree; needs pyelftools)")
+    ap.add_argument("--root", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."),
+                    help="--parts: repository root, under which the project's functions are declared")
+    ap.add_argument("--min", type=float, default=1.0, help="--parts: hide nodes below this percent of the cycles")
     ap.add_argument("elf")
     ap.add_argument("profile")
     ap.add_argument("pixels", type=int)
     args = ap.parse_args()
     funcs = functions(args.nm, args.elf) if args.nm else None
-    insns, cycles, by_class, by_function = model(
+    insns, cycles, by_class, by_function, by_pc = model(
         disassembly(args.objdump, args.elf, args.mcpu), args.profile, args.flash_ws, funcs)
     if insns == 0:
         sys.exit("cycles.py: empty window profile")
@@ -207,6 +218,12 @@ def main():
         if c >= 0.005 * cycles:
             print(f"  {n / args.pixels:8.1f} insns/px {c / args.pixels:8.1f} cycles/px  {name}",
                   file=sys.stderr)
+    if args.parts and args.nm:
+        from profile import attribution, show_tree, tree_of
+        tree, totals = tree_of(by_pc, attribution(args.nm, args.elf, args.root))
+        print(f"  insns/px cycles/px (share of the cycles) by function and inlined source function "
+              f"(nodes under {args.min}% hidden):", file=sys.stderr)
+        show_tree(tree, totals, args.pixels, args.min, share=1, out=sys.stderr)
 
 
 if __name__ == "__main__":

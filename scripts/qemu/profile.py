@@ -125,6 +125,67 @@ def inlined_ranges(elf, root):
     return result
 
 
+def attribution(nm, elf, root):
+    """A function from an executed address to its path: (function, the
+    project functions inlined there, outermost first), or None outside
+    every function."""
+    funcs = functions(nm, elf)
+    starts = [f[0] for f in funcs]
+    with open(elf, "rb") as f:
+        ranges = inlined_ranges(f, os.path.realpath(root))
+    # Only ranges that hold executed addresses matter: index them by start.
+    ranges.sort()
+    range_starts = [r[0] for r in ranges]
+
+    def path_of(pc):
+        i = bisect.bisect_right(starts, pc) - 1
+        if i < 0 or pc >= funcs[i][1]:
+            return None
+        func = short(funcs[i][2])
+        # Inlined frames containing pc: ranges start at or before pc.
+        j = bisect.bisect_right(range_starts, pc)
+        frames = sorted((d, name) for lo, hi, d, name in ranges[max(0, j - 4000):j] if lo <= pc < hi)
+        return (func,) + tuple(name for _, name in frames)
+    return path_of
+
+
+def tree_of(weights, path_of):
+    """{path prefix: [sum of each weight column]} over `weights`
+    ({pc: [w, ...]}), and the columns' totals."""
+    tree = defaultdict(lambda: None)
+    width = len(next(iter(weights.values()), []))
+    totals = [0] * width
+    for pc, ws in weights.items():
+        path = path_of(pc)
+        if path is None:
+            continue
+        for k in range(1, len(path) + 1):
+            node = tree[path[:k]]
+            if node is None:
+                node = tree[path[:k]] = [0] * width
+            for c, w in enumerate(ws):
+                node[c] += w
+        for c, w in enumerate(ws):
+            totals[c] += w
+    return tree, totals
+
+
+def show_tree(tree, totals, pixels, minimum, share=0, out=sys.stdout):
+    """The tree, each node's columns per pixel and its share of column
+    `share`'s total, nodes under `minimum` percent of it hidden."""
+    def show(prefix, depth):
+        children = sorted((p for p in tree if len(p) == len(prefix) + 1 and p[:len(prefix)] == prefix),
+                          key=lambda p: -tree[p][share])
+        for p in children:
+            pct = 100.0 * tree[p][share] / totals[share]
+            if pct < minimum:
+                continue
+            cells = "".join(f"{v / pixels:8.1f}" for v in tree[p])
+            print(f"{'  ' * depth}{cells}  {pct:5.1f}%  {p[-1]}", file=out)
+            show(p, depth + 1)
+    show((), 0)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--nm", required=True)
@@ -136,47 +197,16 @@ def main():
     ap.add_argument("pixels", type=int)
     args = ap.parse_args()
 
-    funcs = functions(args.nm, args.elf)
-    starts = [f[0] for f in funcs]
     counts = {}
     with open(args.profile) as f:
         for line in f:
             pc, n = line.split()
-            counts[int(pc, 16)] = int(n)
-
-    with open(args.elf, "rb") as f:
-        ranges = inlined_ranges(f, os.path.realpath(args.root))
-    # Only ranges that hold executed addresses matter: index them by start.
-    ranges.sort()
-    range_starts = [r[0] for r in ranges]
-
-    tree = defaultdict(int)  # path tuple -> instructions
-    total = 0
-    for pc, n in counts.items():
-        i = bisect.bisect_right(starts, pc) - 1
-        if i < 0 or pc >= funcs[i][1]:
-            continue
-        func = short(funcs[i][2])
-        # Inlined frames containing pc: ranges start at or before pc.
-        j = bisect.bisect_right(range_starts, pc)
-        frames = sorted((d, name) for lo, hi, d, name in ranges[max(0, j - 4000):j] if lo <= pc < hi)
-        path = (func,) + tuple(name for _, name in frames)
-        for k in range(1, len(path) + 1):
-            tree[path[:k]] += n
-        total += n
-
-    def show(prefix, depth):
-        children = sorted((p for p in tree if len(p) == len(prefix) + 1 and p[:len(prefix)] == prefix),
-                          key=lambda p: -tree[p])
-        for p in children:
-            if 100.0 * tree[p] / total < args.min:
-                continue
-            print(f"{'  ' * depth}{tree[p] / args.pixels:8.1f}  {100.0 * tree[p] / total:5.1f}%  {p[-1]}")
-            show(p, depth + 1)
+            counts[int(pc, 16)] = [int(n)]
+    tree, [total] = tree_of(counts, attribution(args.nm, args.elf, args.root))
 
     print(f"instructions per output pixel by function and inlined source function "
           f"(all code executed, {total / args.pixels:.1f}/px; nodes under {args.min}% hidden):")
-    show((), 0)
+    show_tree(tree, [total], args.pixels, args.min)
     return 0
 
 
