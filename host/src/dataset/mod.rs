@@ -40,7 +40,8 @@ use serde_json::json;
 
 use crate::HostError;
 use crate::outputs::{DirWriter, ImageFormat, OutputSpec};
-use crate::pipeline::{self, Compute, Destination, Options, Summary};
+use crate::engine::Compute;
+use crate::pipeline::{self, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
 use crate::sequence::sampled::FramePlan;
 use crate::sequence::{self, FrameSource, InputSpec, input_error};
