@@ -24,12 +24,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::sync::{Arc, Mutex};
 
-
+use crate::HostError;
 use crate::engine::{Compute, Image, PairEngine};
 use crate::outputs::{DirWriter, OutputSpec, StreamFormat, y4m_frame_into, y4m_header};
 use crate::page_buffer::{ByteBuffer, PageBytes};
 use crate::sequence::{Frame, FrameSource};
-use crate::HostError;
 
 /// Set when the user asks the process to stop (Ctrl-C): no new pair is
 /// started, pairs in flight finish, and the run reports the interruption.
@@ -271,7 +270,10 @@ fn process_with(
     // The threads that help finish the run's last pairs (none on one).
     let pool = match threads {
         1 => None,
-        n => Some(Arc::new(crate::workers::kept_pool(n - 1, "reynoldsflow-help")?)),
+        n => Some(Arc::new(crate::workers::kept_pool(
+            n - 1,
+            "reynoldsflow-help",
+        )?)),
     };
 
     let result = std::thread::scope(|scope| {
@@ -826,7 +828,10 @@ fn renamed_file(path: &std::path::Path, from: &str, to: &str) -> std::path::Path
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Gray;
     use crate::sequence::index_stem;
+    use crate::settings::{EngineKind, ScaleArg};
+    use reynoldsflow_core::IntensityScale;
 
     /// `n` small moving frames, then an error if `fail`.
     struct Frames {
@@ -965,6 +970,26 @@ mod tests {
         fn drop(&mut self) {
             self.0.inside.lock().unwrap().0 -= 1;
         }
+    }
+
+    #[test]
+    fn a_pair_is_one_of_the_last_once_the_end_is_known() {
+        let last = LastPairs::new(2);
+        assert!(!last.shares(29), "before the end is known");
+        last.end_input(31);
+        assert!(last.shares(29) && !last.shares(28));
+        let last = LastPairs::new(3);
+        last.end_input(31);
+        assert!(last.shares(28) && !last.shares(27));
+        let last = LastPairs::new(4);
+        last.end_input(2);
+        assert!(last.shares(0));
+        let last = LastPairs::new(1);
+        last.end_input(31);
+        assert!(
+            (0..30).all(|pair| !last.shares(pair)),
+            "one worker spreads nothing"
+        );
     }
 
     /// Two workers compute two pairs at the same time (a worker that kept

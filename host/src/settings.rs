@@ -9,7 +9,6 @@ use std::fmt;
 
 use reynoldsflow_core::IntensityScale;
 
-
 /// A setting's value drawn from a fixed list of names (an engine, a
 /// variant): how front ends list and parse the choices without restating them.
 pub trait Choice: Copy + Sized + 'static {

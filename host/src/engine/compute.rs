@@ -47,7 +47,6 @@ impl Settings {
             self.tile,
         )
     }
-
 }
 
 /// The computation of one pair: engine and parameters, checked once.
@@ -340,4 +339,3 @@ fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
         )
     })
 }
-

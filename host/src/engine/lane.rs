@@ -98,7 +98,11 @@ fn output(width: usize, height: usize, pixels: &[FlowPixel], rep: Vec<u8>) -> Fi
 
 /// The RGB bytes of every pixel, in `scaling` once the frame's `extremes`
 /// are known.
-fn rgb_of(pixels: &[FlowPixel], extremes: reynoldsflow_core::ExtremesSink, scaling: Scaling) -> Vec<u8> {
+fn rgb_of(
+    pixels: &[FlowPixel],
+    extremes: reynoldsflow_core::ExtremesSink,
+    scaling: Scaling,
+) -> Vec<u8> {
     let (scale_d, scale_c) = scaling
         .byte_scales(|| Ok::<_, std::convert::Infallible>(extremes))
         .unwrap_or_else(|never| match never {});
@@ -217,14 +221,7 @@ impl Lane {
         if !matches!(scaling, Scaling::PerFrameMinMax) {
             // Known gains: the core's `represent` streams rows into the bytes in one pass.
             let pass = Pass::Represent(scaling, rgb.overwrite(bytes)?);
-            return Ok(bytes::run(
-                self.isa,
-                engine,
-                &plan,
-                &frames,
-                pass,
-                &mut (),
-            )?);
+            return Ok(bytes::run(self.isa, engine, &plan, &frames, pass, &mut ())?);
         }
         let mut sink = KeptMagnitudes::new(width, self.kept.planes(width * height)?);
         bytes::run(self.isa, engine, &plan, &frames, Pass::All, &mut sink)?;
@@ -243,6 +240,7 @@ mod tests {
     use fixed::types::U16F16;
 
     use super::*;
+    use reynoldsflow_core::ByteScale;
 
     /// Both scale modes: per-frame min–max, and gains 8 (|v_d|) and 32 (|v_c|).
     const SCALINGS: [Scaling; 2] = [

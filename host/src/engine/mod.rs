@@ -200,9 +200,7 @@ impl PairEngine {
                 let rgb = rgb.overwrite(3 * prev.pixels.len())?;
                 self.tiles(prev, next, params, scaling, rgb, Image::default())
             }
-            _ => self
-                .compute
-                .representation(&mut self.lane, prev, next, rgb),
+            _ => self.compute.representation(&mut self.lane, prev, next, rgb),
         }
     }
 
@@ -286,7 +284,13 @@ impl PairEngine {
                 tile.bytes(isa, luma, width, &[d, c], &image);
             }
         };
-        spread(&bands, self.pool.as_deref(), memory, &mut self.helpers, &finish);
+        spread(
+            &bands,
+            self.pool.as_deref(),
+            memory,
+            &mut self.helpers,
+            &finish,
+        );
         bands.result()?;
         if self.keep {
             self.keep_luma(prev, width, height);
@@ -312,7 +316,13 @@ impl PairEngine {
         let tiles = PixelRows::split(&plan, width, &mut self.pixels);
         let tiles: Vec<Mutex<PixelRows<'_>>> = tiles.into_iter().map(Mutex::new).collect();
         let bands = Bands::new(&plan, &frames, isa, &tiles);
-        spread(&bands, self.pool.as_deref(), memory, &mut self.helpers, &|_| ());
+        spread(
+            &bands,
+            self.pool.as_deref(),
+            memory,
+            &mut self.helpers,
+            &|_| (),
+        );
         bands.result()?;
         drop(tiles);
         let pixels = &self.pixels;

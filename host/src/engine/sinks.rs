@@ -288,4 +288,3 @@ impl ByteBuffer for Exact<'_> {
             })
     }
 }
-

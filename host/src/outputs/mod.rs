@@ -28,10 +28,10 @@ use std::sync::{Arc, Mutex};
 
 use npyz::WriterBuilder;
 
+use crate::engine::Image;
 pub use crate::image_io::{JpegSubsampling, PngCompression};
 use crate::page_buffer::ByteBuffer;
 use crate::settings::choices;
-use crate::engine::Image;
 use crate::{HostError, atomic, image_io};
 use background::Stage;
 
@@ -752,7 +752,7 @@ pub fn clean_stale_temps(dir: &Path) -> Result<usize, HostError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Flow;
+    use crate::{Flow, FlowPlanes};
 
     fn fields() -> PairFields {
         PairFields {

@@ -20,7 +20,6 @@ use portable::bytes_from_kept;
 mod avx2;
 mod portable;
 
-
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Isa {
@@ -222,4 +221,3 @@ best_targets! {
         }
     }
 }
-

@@ -44,4 +44,3 @@ pub(crate) fn bytes_from_kept(
         *out = reynoldsflow_core::rgb(&pixel, scale_d, scale_c);
     }
 }
-
