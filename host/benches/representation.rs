@@ -17,7 +17,7 @@
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use reynoldsflow_core::{Params, Scaling};
+use reynoldsflow_core::Scaling;
 use reynoldsflow_host::Gray;
 use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
