@@ -19,7 +19,7 @@ use std::sync::{Condvar, Mutex};
 use reynoldsflow_core::{Config, FramePair, HALO, Params, Plan, Sink};
 
 use super::bytes::{self, Isa, Pass};
-use super::lane::HostEngine;
+use super::memory::HostEngine;
 use crate::{Gray, HostError};
 
 /// The widest of the host's default tiles: full-height strips of at most

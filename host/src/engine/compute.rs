@@ -7,7 +7,7 @@
 use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
 
-use super::PairFields;
+use super::image::PairFields;
 use super::lane::Lane;
 use crate::page_buffer::ByteBuffer;
 use crate::reference::{self, FloatParams, FloatScaling};

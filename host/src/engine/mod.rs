@@ -33,11 +33,13 @@ pub mod bytes;
 pub mod compute;
 mod image;
 mod lane;
+mod memory;
 mod sinks;
 
 pub use compute::Compute;
 pub use image::{Image, PairFields};
-pub use lane::{FixedOutput, HostEngine, compute_fixed, compute_fixed_on, planes_of};
+pub use lane::{FixedOutput, compute_fixed, compute_fixed_on, planes_of};
+pub use memory::HostEngine;
 
 use bands::{Bands, balanced_tile, prepare, spread};
 use compute::tile_error;
