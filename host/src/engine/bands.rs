@@ -3,10 +3,10 @@
 //!
 //! Tiling: one thread computes a pair in full-height strips
 //! ([`strip_width`]); several threads cut those strips into bands
-//! ([`balanced_tile`]); `--tile` overrides both. Every tiling gives the
+//! (`balanced_tile`); `--tile` overrides both. Every tiling gives the
 //! same bytes.
 //!
-//! Threads: a pair's tiles are [`Bands`], taken one at a time by whichever
+//! Threads: a pair's tiles are `Bands`, taken one at a time by whichever
 //! thread is free (the thread that asked, and the engine's kept pool),
 //! each writing straight into the pair's shared planes through its tile's
 //! sink; once every tile is computed, each thread finishes the tiles it
