@@ -268,6 +268,14 @@ impl OutputSpec {
         self.shown().arrange(rgb);
     }
 
+    /// The colour wheel (`DIR/hsv/`), whatever the `--variant`.
+    fn wheel(&self) -> Image {
+        Image {
+            variant: Variant::Hsv,
+            hsv_max: self.hsv_max,
+        }
+    }
+
     /// The image the `--variant` shows.
     pub fn shown(&self) -> Image {
         Image {
@@ -298,7 +306,7 @@ impl OutputSpec {
             files.push(self.image_file(stem, w, h, &self.image(f))?);
         }
         if self.viz {
-            let image = self.image_format.encode(w, h, &self.shown().of(f))?;
+            let image = self.image_format.encode(w, h, &self.wheel().of(f))?;
             let name = format!("{stem}.{}", self.image_format.extension());
             files.push((Path::new("hsv").join(name), image));
         }
