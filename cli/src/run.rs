@@ -13,11 +13,12 @@ use super::progress::Progress;
 use super::values::choice;
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::ItemSettings;
+use reynoldsflow_host::engine::Compute;
 use reynoldsflow_host::outputs::{
     self, DEFAULT_JPEG_QUALITY, DirWriter, Fields, ImageFormat, ImageFormatName, JpegSubsampling,
     NpyDtype, OutputSpec, PngCompression, StreamFormat, Variant,
 };
-use reynoldsflow_host::pipeline::{self, Compute, Destination, Options, Summary};
+use reynoldsflow_host::pipeline::{self, Destination, Options, Summary};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan, FrameSize, Rate};
 use reynoldsflow_host::sequence::{self, FrameSource, InputSpec};
 use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize};

@@ -15,8 +15,9 @@ use super::run::{
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::captured::{Captured, CapturedFormat};
 use reynoldsflow_host::compare::{Comparison, Difference, Outcome};
+use reynoldsflow_host::engine::Compute;
 use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
-use reynoldsflow_host::pipeline::{self, Compute, Destination, Options};
+use reynoldsflow_host::pipeline::{self, Destination, Options};
 use reynoldsflow_host::sequence::{self, InputSpec, Peeked};
 
 /// Shown by `reynoldsflow verify --help`.

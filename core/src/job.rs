@@ -9,7 +9,9 @@ use crate::{Config, Error, FramePair, Plan};
 pub struct Job<'a> {
     plan: &'a Plan,
     frames: FramePair<'a>,
-    kernels: Choice,
+    /// The kernel set its pass runs; set by the kernels that a run-time
+    /// choice makes available (`kernels/`).
+    pub(crate) kernels: Choice,
 }
 
 impl<'a> Job<'a> {
@@ -25,14 +27,6 @@ impl<'a> Job<'a> {
             frames,
             kernels: Choice::default(),
         })
-    }
-
-    /// The same job, its pass run with the kernel set that `kernels`
-    /// names: a set chosen at run time (`kernels/avx2.rs`, the one target
-    /// that has one).
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    pub(crate) const fn with_kernels(self, kernels: Choice) -> Self {
-        Self { kernels, ..self }
     }
 
     /// The kernel set its pass runs.

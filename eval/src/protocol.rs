@@ -12,7 +12,7 @@ use super::scenes::{Pattern, Scenario, SceneSpec, Sequence};
 use super::truth::{self, Pose};
 use reynoldsflow_host::Flow;
 use reynoldsflow_host::reference::{self, FloatFlow, FloatParams, FloatScaling};
-use reynoldsflow_host::{Gray, HostError, fixed_engine, workers};
+use reynoldsflow_host::{Gray, HostError, engine, workers};
 
 /// A flow estimate under evaluation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -294,13 +294,8 @@ fn evaluate_sequence(
         let rf: FloatFlow = reference::compute(prev, next, &FloatParams::default())?;
         clock(Method::RfVr, t);
         let t = Instant::now();
-        let fixed = fixed_engine::compute_fixed(
-            prev,
-            next,
-            Params::DEFAULT,
-            None,
-            Scaling::PerFrameMinMax,
-        )?;
+        let fixed =
+            engine::compute_fixed(prev, next, Params::DEFAULT, None, Scaling::PerFrameMinMax)?;
         clock(Method::RfVrFixed, t);
         let t = Instant::now();
         let rf_small = reference::compute(prev, next, &small)?;

@@ -30,8 +30,8 @@ use std::time::Instant;
 
 use reynoldsflow_core::Scaling;
 use reynoldsflow_host::Gray;
-use reynoldsflow_host::dispatch::Isa;
-use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::engine::PairEngine;
+use reynoldsflow_host::engine::bytes::Isa;
 use reynoldsflow_host::settings::{ScaleArg, Settings};
 
 mod common;

@@ -6,9 +6,9 @@
 //! - `core/strips-minmax`: the same with per-frame min–max (two passes);
 //! - `core/tiles-64x64`: an `Engine<78>` over 64×64 tiles, `Fixed`;
 //! - `host/planes`: the host's whole-frame path with every plane out
-//!   (`FrameEngine::compute`: per-frame min–max in one pass, f64 planes),
+//!   (`PairEngine::fields`: per-frame min–max in one pass, f64 planes),
 //!   one thread, as `run --npy` and `pair` compute;
-//! - `host/rgb`: the same path, the bytes alone (`FrameEngine::represent`,
+//! - `host/rgb`: the same path, the bytes alone (`PairEngine::image`,
 //!   per-frame min–max), as `run` computes by default;
 //! - `float/reference`: the float64 reference, `compute` + `representation`.
 //!
@@ -17,12 +17,13 @@
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use reynoldsflow_core::{Params, Scaling};
+use reynoldsflow_core::Scaling;
 use reynoldsflow_host::Gray;
-use reynoldsflow_host::fixed_engine::FrameEngine;
+use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
+use reynoldsflow_host::settings::Settings;
 
-use reynoldsflow_host::dispatch::Isa;
+use reynoldsflow_host::engine::bytes::Isa;
 
 mod common;
 use common::{COLS, FIXED, SIZES, core_engine, moving_pair};
@@ -58,21 +59,18 @@ fn representation_benches(c: &mut Criterion) {
         group.bench_function(BenchmarkId::from_parameter("core/tiles-64x64"), |b| {
             b.iter(&mut run)
         });
-        let (mut engine, mut rgb) = (FrameEngine::new(), Vec::new());
-        let minmax = Scaling::PerFrameMinMax;
+        // The engine at the defaults (per-frame min–max), one thread.
+        let settings = Settings {
+            threads: Some(1),
+            ..Settings::default()
+        };
+        let mut engine = PairEngine::new(&settings).unwrap();
+        let mut rgb = vec![0; 3 * w * h];
         group.bench_function(BenchmarkId::from_parameter("host/planes"), |b| {
-            b.iter(|| {
-                engine
-                    .compute(&gprev, &gnext, Params::DEFAULT, None, minmax)
-                    .unwrap()
-            })
+            b.iter(|| engine.fields(&gprev, &gnext).unwrap())
         });
         group.bench_function(BenchmarkId::from_parameter("host/rgb"), |b| {
-            b.iter(|| {
-                engine
-                    .represent(&gprev, &gnext, Params::DEFAULT, None, minmax, &mut rgb)
-                    .unwrap()
-            })
+            b.iter(|| engine.image(&gprev, &gnext, &mut rgb).unwrap())
         });
         group.bench_function(BenchmarkId::from_parameter("float/reference"), |b| {
             b.iter(|| {

@@ -28,8 +28,9 @@ use reynoldsflow_core::{
 
 mod common;
 use common::{SIZES, moving_pair};
-use reynoldsflow_host::dispatch::{self, Isa, Pass};
-use reynoldsflow_host::fixed_engine::{HostEngine, strip_width};
+use reynoldsflow_host::engine::HostEngine;
+use reynoldsflow_host::engine::bands::strip_width;
+use reynoldsflow_host::engine::bytes::{self, Isa, Pass};
 
 const FIXED: Scaling = Scaling::Fixed {
     k_d: U16F16::lit("8"),
@@ -41,7 +42,7 @@ const FIXED: Scaling = Scaling::Fixed {
 #[inline(never)]
 fn engine_pass(isa: Isa, engine: &mut SliceEngine<'_>, job: &Job<'_>, rgb: &mut [u8]) {
     let pass = Pass::Represent(FIXED, rgb);
-    dispatch::run(isa, engine, job.plan(), job.frames(), pass, &mut ()).unwrap();
+    bytes::run(isa, engine, job.plan(), job.frames(), pass, &mut ()).unwrap();
 }
 
 /// FNV-1a over every field of every pixel, in the order the sink sees them.

@@ -2,7 +2,7 @@
 //! (the GStreamer element's region metas and messages, the ROS 2 node's
 //! detections): the cues crate's [`MotionCues`] on one grid, its settings
 //! checked once, and the pair's kept magnitudes replayed into it row by
-//! row ([`PairEngine::magnitudes`](crate::pair_engine::PairEngine::magnitudes)).
+//! row ([`PairEngine::magnitudes`](crate::engine::PairEngine::magnitudes)).
 //! Each region comes out as a [`CueBox`], which each front end writes in
 //! its own message type.
 
@@ -11,7 +11,7 @@ use reynoldsflow_core::{Config, Params, Pixels, Sink};
 use reynoldsflow_cues::{CueError, CueParams, Field, MotionCues, Region, Threshold};
 
 use crate::HostError;
-use crate::pair_engine::Magnitudes;
+use crate::engine::Magnitudes;
 use crate::settings::{Setting, Settings};
 
 /// Cell side, px: 16-px cells keep a small mover in one or two cells at

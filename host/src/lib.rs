@@ -1,6 +1,6 @@
 //! Host side of ReynoldsFlow: the float64 reference of the SPEC
 //! ([`reference`](mod@reference)), the fixed-point core run over whole frames
-//! ([`fixed_engine`]), frames, video, image and `.npy` I/O, the one
+//! ([`engine`]), frames, video, image and `.npy` I/O, the one
 //! [`Settings`](settings::Settings) every front end maps its names onto,
 //! the pipeline and datasets. The `reynoldsflow` command line
 //! (`reynoldsflow-cli`) and the evaluation (`reynoldsflow-eval`) are crates
@@ -20,17 +20,14 @@
 #![deny(missing_docs)]
 
 pub mod atomic;
-#[cfg(target_arch = "x86_64")]
-mod avx2_bytes;
 pub mod captured;
 pub mod compare;
 pub mod content_hash;
 pub mod cues;
 pub mod dataset;
 mod decoder_guard;
-pub mod dispatch;
+pub mod engine;
 mod error;
-pub mod fixed_engine;
 pub mod flow;
 pub mod gray;
 pub mod image_io;
@@ -38,13 +35,11 @@ pub mod limits;
 pub mod npy;
 pub mod outputs;
 pub mod page_buffer;
-pub mod pair_engine;
 pub mod pair_stream;
 pub mod pipeline;
 pub mod reference;
 pub mod sequence;
 pub mod settings;
-mod shared_pair;
 pub mod viz;
 pub mod workers;
 

@@ -7,13 +7,14 @@
 //! encode its stream frame); this thread puts stream frames out in order
 //! and counts. At most `2 · threads` pairs are in flight (read but not yet
 //! delivered), so memory stays bounded whatever the sequence's length, and
-//! the output is the same for every thread count. The run's last pairs
-//! are computed tile by tile, so that a worker with no pair left helps
-//! finish them (`host/src/shared_pair.rs`).
+//! the output is the same for every thread count. Each worker holds the
+//! one engine ([`PairEngine`]); the run's last pairs are spread over the
+//! run's kept pool ([`crate::engine::bands`]), so that the threads of
+//! workers with no pair left help finish them.
 //!
 //! Only what the outputs need is computed: when no output needs the fields
 //! ([`OutputSpec::needs_fields`]), a worker computes the representation's
-//! bytes alone ([`FrameEngine::represent`]). Frames, engines and output buffers are
+//! bytes alone. Frames, engines and output buffers are
 //! reused from pair to pair (a `Pool`), so a warm run allocates no frame-
 //! sized memory.
 
@@ -23,338 +24,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::sync::{Arc, Mutex};
 
-use fixed::types::{U16F16, U32F32};
-use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
-
-use crate::fixed_engine::FrameEngine;
-use crate::outputs::{DirWriter, OutputSpec, PairFields, StreamFormat, y4m_frame_into, y4m_header};
+use crate::HostError;
+use crate::engine::{Compute, Image, PairEngine};
+use crate::outputs::{DirWriter, OutputSpec, StreamFormat, y4m_frame_into, y4m_header};
 use crate::page_buffer::{ByteBuffer, PageBytes};
-use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
-use crate::settings::{EngineKind, ScaleArg, Setting, TileSize};
-use crate::shared_pair::{Desk, SharedPair};
-use crate::{Gray, HostError};
 
 /// Set when the user asks the process to stop (Ctrl-C): no new pair is
 /// started, pairs in flight finish, and the run reports the interruption.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// The computation of one pair: engine and parameters, checked once.
-#[derive(Clone, Debug)]
-pub struct Compute {
-    engine: EngineKind,
-    scale: ScaleArg,
-    intensity_scale: IntensityScale,
-    lambda: f64,
-    tile: Option<TileSize>,
-    fixed: Option<(Params, Scaling)>,
-    /// Where the pipeline's tests see whether two workers compute at once.
-    #[cfg(test)]
-    overlap: Option<std::sync::Arc<tests::Overlap>>,
-}
-
-impl Compute {
-    /// Check the parameters the way `reynoldsflow pair` does, naming the
-    /// flag at fault.
-    pub fn new(
-        engine: EngineKind,
-        scale: ScaleArg,
-        intensity_scale: IntensityScale,
-        lambda: f64,
-        tile: Option<TileSize>,
-    ) -> Result<Self, HostError> {
-        let mut compute = Self {
-            engine,
-            scale,
-            intensity_scale,
-            lambda,
-            tile,
-            fixed: None,
-            #[cfg(test)]
-            overlap: None,
-        };
-        match engine {
-            EngineKind::Float => {
-                if tile.is_some() {
-                    return Err(HostError::setting(
-                        Setting::Tile,
-                        "only the fixed engine works in tiles; leave the tile unset or use the fixed engine",
-                    ));
-                }
-            }
-            EngineKind::Fixed => {
-                let params = core_params(intensity_scale, lambda)?;
-                compute.fixed = Some((params, core_scaling(scale)?));
-            }
-        }
-        Ok(compute)
-    }
-
-    /// The engine.
-    pub fn engine(&self) -> EngineKind {
-        self.engine
-    }
-
-    /// The fixed engine's parameters and scaling (none for the float engine).
-    pub(crate) fn fixed(&self) -> Option<(Params, Scaling)> {
-        self.fixed
-    }
-
-    /// The tile size, when set.
-    pub(crate) fn tile(&self) -> Option<TileSize> {
-        self.tile
-    }
-
-    /// One pair, exactly as `reynoldsflow pair` computes it.
-    pub fn pair(&self, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
-        self.pair_with(&mut FrameEngine::new(), prev, next)
-    }
-
-    /// [`Self::pair`] with the reused buffers of `engine`.
-    pub fn pair_with(
-        &self,
-        engine: &mut FrameEngine,
-        prev: &Gray,
-        next: &Gray,
-    ) -> Result<PairFields, HostError> {
-        if prev.size() != next.size() {
-            return Err(HostError::SizeMismatch {
-                prev: prev.size(),
-                next: next.size(),
-            });
-        }
-        match self.fixed {
-            None => float_pair(prev, next, self.intensity_scale, self.lambda, self.scale),
-            Some((params, scaling)) => {
-                let tile = self.tile.map(|t| (t.width, t.height));
-                // One worker per pair already keeps the cores busy: each pair on one thread.
-                let out = engine
-                    .compute(prev, next, params, tile, scaling)
-                    .map_err(tile_error)?;
-                Ok(PairFields {
-                    planes: out.planes,
-                    rep: out.rep,
-                })
-            }
-        }
-    }
-
-    /// [`Self::representation`] of `job`; one of a run's last pairs (which
-    /// `desk` shares) has its tiles open to idle workers when the fixed
-    /// engine keeps magnitudes, in per-frame min–max ([`crate::shared_pair`]).
-    fn job_representation(
-        &self,
-        engine: &mut FrameEngine,
-        job: &Job,
-        desk: &Desk,
-        rgb: &mut impl ByteBuffer,
-    ) -> Result<(), HostError> {
-        match self.fixed {
-            Some((params, Scaling::PerFrameMinMax)) if desk.shares(job.index) => {
-                let tile = self.tile.map(|t| (t.width, t.height));
-                let (prev, next) = (Arc::clone(&job.prev), Arc::clone(&job.next));
-                let pair = SharedPair::new(prev, next, params, tile).map_err(tile_error)?;
-                desk.represent(pair, engine, rgb).map_err(tile_error)
-            }
-            _ => self.representation(engine, &job.prev.gray, &job.next.gray, rgb),
-        }
-    }
-
-    /// The representation of one pair alone into `rgb`: the bytes of
-    /// [`Self::pair`]'s `rep`, computed by the fixed engine with the reused
-    /// buffers of `engine` and nothing else.
-    pub fn representation(
-        &self,
-        engine: &mut FrameEngine,
-        prev: &Gray,
-        next: &Gray,
-        rgb: &mut impl ByteBuffer,
-    ) -> Result<(), HostError> {
-        match self.fixed {
-            None => {
-                let fields = self.pair_with(engine, prev, next)?;
-                rgb.overwrite(fields.rep.len())?
-                    .copy_from_slice(&fields.rep);
-                Ok(())
-            }
-            Some((params, scaling)) => {
-                let tile = self.tile.map(|t| (t.width, t.height));
-                engine
-                    .represent(prev, next, params, tile, scaling, rgb)
-                    .map_err(tile_error)
-            }
-        }
-    }
-}
-
-/// A tile the core refuses is the fault of the tile setting.
-pub(crate) fn tile_error(e: HostError) -> HostError {
-    match e {
-        HostError::Core(c @ CoreError::TileOutOfFrame) => {
-            HostError::setting(Setting::Tile, c.to_string())
-        }
-        e => e,
-    }
-}
-
-/// The float reference on one pair, with the representation of `scale`.
-pub(crate) fn float_pair(
-    prev: &Gray,
-    next: &Gray,
-    intensity_scale: IntensityScale,
-    lambda: f64,
-    scale: ScaleArg,
-) -> Result<PairFields, HostError> {
-    let params = FloatParams {
-        intensity_scale: f64::from(intensity_scale.num()) / f64::from(intensity_scale.den()),
-        lambda,
-    };
-    let planes = reference::compute(prev, next, &params)?;
-    let scaling = match scale {
-        ScaleArg::MinMax => FloatScaling::PerFrameMinMax,
-        ScaleArg::Fixed { k_d, k_c } => FloatScaling::Fixed { k_d, k_c },
-    };
-    let rep = reference::representation(&planes, prev, scaling);
-    Ok(PairFields { planes, rep })
-}
-
-/// The core's parameters, λ rounded to its Q32.32 and within the core's
-/// integer bounds at this intensity scale, or the λ setting's error
-/// stating that range ([`lambda_range`]).
-pub(crate) fn core_params(
-    intensity_scale: IntensityScale,
-    lambda: f64,
-) -> Result<Params, HostError> {
-    match fixed_params(intensity_scale, lambda) {
-        Ok(Some(params)) => Ok(params),
-        Ok(None) => Err(lambda_range(intensity_scale, lambda)),
-        Err(e) => Err(HostError::setting(Setting::IntensityScale, e.to_string())),
-    }
-}
-
-/// The check of λ for the fixed engine, the one both the refusal and the
-/// range it states come from: λ as the core's Q32.32 (rounded to nearest),
-/// then the core's own bounds on `Λ4 = round(65536 · λ / s²)`
-/// (`Config::new` on a 1×1 frame: they do not depend on the frame size).
-/// `Ok(None)` where λ is outside them; `Err` where the core refuses
-/// something else (the intensity scale).
-fn fixed_params(intensity_scale: IntensityScale, lambda: f64) -> Result<Option<Params>, CoreError> {
-    let Some(lambda) = U32F32::checked_from_num(lambda) else {
-        return Ok(None);
-    };
-    let params = Params {
-        scale: intensity_scale,
-        lambda,
-    };
-    match Config::new(1, 1, params) {
-        Ok(_) => Ok(Some(params)),
-        Err(CoreError::LambdaOutOfRange) => Ok(None),
-        Err(e) => Err(e),
-    }
-}
-
-/// The least and the greatest λ the fixed engine takes at this intensity
-/// scale, found by [`fixed_params`] itself: the λ it takes form one
-/// interval (`Λ4` grows with λ), so a bisection over the ordered bit
-/// patterns of positive `f64`s finds each end exactly. `None` where it
-/// takes none.
-fn lambda_bounds(intensity_scale: IntensityScale) -> Option<(f64, f64)> {
-    let takes = |bits: u64| {
-        matches!(
-            fixed_params(intensity_scale, f64::from_bits(bits)),
-            Ok(Some(_))
-        )
-    };
-    // One λ taken: Λ4 spans 2³⁰, so a power of two in every factor of 4 finds it.
-    let inside = (-80..=40)
-        .map(|e| 2f64.powi(e).to_bits())
-        .find(|&b| takes(b))?;
-    // The first bit pattern in `lo..hi` where `takes` turns to `to`, given
-    // `takes(lo) != to` and `takes(hi) == to`.
-    let turn = |mut lo: u64, mut hi: u64, to: bool| {
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
-            if takes(mid) == to {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        hi
-    };
-    let low = turn(0, inside, true);
-    let high = turn(inside, f64::INFINITY.to_bits(), false) - 1;
-    Some((f64::from_bits(low), f64::from_bits(high)))
-}
-
-/// `x` to three significant digits (`1.23e-4`), rounded up (`up`) or
-/// down: the ends of a range written so that every number between them is
-/// inside it.
-fn three_digits(x: f64, up: bool) -> String {
-    let nearest = format!("{x:.2e}");
-    let (mantissa, exponent) = nearest
-        .split_once('e')
-        .expect("LowerExp writes an exponent");
-    let (mut units, mut exponent): (i64, i32) = (
-        mantissa.replace('.', "").parse().expect("d.dd"),
-        exponent.parse().expect("an integer exponent"),
-    );
-    let value =
-        |units: i64, exponent: i32| format!("{}.{:02}e{exponent}", units / 100, units % 100);
-    let written: f64 = nearest.parse().expect("a number");
-    if up && written < x {
-        units += 1;
-    } else if !up && written > x {
-        units -= 1;
-    }
-    if units == 1000 {
-        (units, exponent) = (100, exponent + 1);
-    } else if units == 99 {
-        (units, exponent) = (999, exponent - 1);
-    }
-    value(units, exponent)
-}
-
-/// The λ setting's refusal at this intensity scale, stating the range the
-/// fixed engine takes there ([`lambda_bounds`]), its ends rounded inwards.
-pub(crate) fn lambda_range(intensity_scale: IntensityScale, lambda: f64) -> HostError {
-    let range = match lambda_bounds(intensity_scale) {
-        Some((low, high)) => format!(
-            "about {} to {}",
-            three_digits(low, true),
-            three_digits(high, false)
-        ),
-        None => "it takes none".to_owned(),
-    };
-    HostError::setting(
-        Setting::Lambda,
-        format!(
-            "{lambda} is outside the fixed engine's range at this intensity scale ({range}); \
-             use the float engine or another intensity scale"
-        ),
-    )
-}
-
-/// The scale setting for the core, gains as its Q16.16.
-pub(crate) fn core_scaling(scale: ScaleArg) -> Result<Scaling, HostError> {
-    Ok(match scale {
-        ScaleArg::MinMax => Scaling::PerFrameMinMax,
-        ScaleArg::Fixed { k_d, k_c } => Scaling::Fixed {
-            k_d: core_gain("KD", k_d)?,
-            k_c: core_gain("KC", k_c)?,
-        },
-    })
-}
-
-/// A gain as the core's Q16.16, rounded to nearest.
-fn core_gain(which: &str, k: f64) -> Result<U16F16, HostError> {
-    U16F16::checked_from_num(k).ok_or_else(|| {
-        HostError::setting(
-            Setting::Scale,
-            format!("{which} = {k} is beyond the fixed engine's range [0, 65536)"),
-        )
-    })
-}
 
 /// Where results go.
 pub enum Destination<'a> {
@@ -534,6 +212,26 @@ pub fn process(
     options: Options,
     on_output: &mut dyn FnMut(),
 ) -> Result<Summary, HostError> {
+    process_with(
+        source,
+        compute,
+        dest,
+        options,
+        on_output,
+        #[cfg(test)]
+        None,
+    )
+}
+
+/// [`process`]; in tests, each worker enters `overlap` while computing.
+fn process_with(
+    source: &mut dyn FrameSource,
+    compute: &Compute,
+    dest: Destination<'_>,
+    options: Options,
+    on_output: &mut dyn FnMut(),
+    #[cfg(test)] overlap: Option<&tests::Overlap>,
+) -> Result<Summary, HostError> {
     let threads = options.threads.max(1);
     let in_flight = 2 * threads;
     let fps = source.frame_rate().unwrap_or((25, 1));
@@ -568,7 +266,15 @@ pub fn process(
         payloads: Pool::new(),
     };
     let buffers = &buffers;
-    let desk = &Desk::new(threads);
+    let desk = &LastPairs::new(threads);
+    // The threads that help finish the run's last pairs (none on one).
+    let pool = match threads {
+        1 => None,
+        n => Some(Arc::new(crate::workers::kept_pool(
+            n - 1,
+            "reynoldsflow-help",
+        )?)),
+    };
 
     let result = std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
@@ -584,14 +290,20 @@ pub fn process(
         for _ in 0..threads {
             let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
             let worker = Worker {
-                compute,
                 needs_fields,
                 dir,
                 stream: stream_spec,
                 samples: sample_spec,
-                engine: FrameEngine::new(),
+                engine: PairEngine::with_pool(
+                    compute.clone(),
+                    Image::default(),
+                    pool.clone(),
+                    threads - 1,
+                ),
                 rgb: Vec::new(),
                 desk,
+                #[cfg(test)]
+                overlap,
             };
             scope.spawn(move || worker.take_jobs(job_rx, &msg_tx, stop, buffers));
         }
@@ -621,6 +333,37 @@ pub fn process(
     Ok(summary)
 }
 
+/// Which of a run's pairs are its last `workers − 1` (when one starts,
+/// the other workers have one pair left at most, and they finish it
+/// first): those are spread over the run's pool, whose threads the idle
+/// workers leave free. With one worker, none is.
+struct LastPairs {
+    workers: usize,
+    /// Frames in the input, once the reader has found its end (0 before).
+    frames: std::sync::atomic::AtomicUsize,
+}
+
+impl LastPairs {
+    fn new(workers: usize) -> Self {
+        Self {
+            workers,
+            frames: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    /// The reader reached the end of the input after `frames` frames.
+    fn end_input(&self, frames: usize) {
+        self.frames.store(frames, Ordering::SeqCst);
+    }
+
+    /// Whether pair `index` is one of the last, once the reader has told
+    /// where the input ends.
+    fn shares(&self, index: usize) -> bool {
+        let frames = self.frames.load(Ordering::SeqCst);
+        self.workers > 1 && frames > 0 && index + self.workers >= frames
+    }
+}
+
 /// The reader's channels: pairs out, tokens in, messages to the collector.
 struct ReaderLinks {
     jobs: SyncSender<Job>,
@@ -636,7 +379,7 @@ fn read_pairs(
     links: ReaderLinks,
     stop: &AtomicBool,
     pool: &Pool<Frame>,
-    desk: &Desk,
+    desk: &LastPairs,
 ) {
     let ReaderLinks { jobs, tokens, msgs } = links;
     let max_frames = options.max_frames;
@@ -695,7 +438,6 @@ fn read_pairs(
 /// A worker: what it computes, where results go, and its own buffers,
 /// reused for every pair it takes.
 struct Worker<'a> {
-    compute: &'a Compute,
     /// Some output needs the fields; otherwise only the representation's
     /// bytes are computed.
     needs_fields: bool,
@@ -703,11 +445,14 @@ struct Worker<'a> {
     stream: Option<(&'a OutputSpec, StreamFormat)>,
     /// Results are samples of this spec.
     samples: Option<&'a OutputSpec>,
-    engine: FrameEngine,
+    engine: PairEngine,
     /// The `--variant` image of the pair (when it is not the payload itself).
     rgb: Vec<u8>,
-    /// Where the run's last pairs are shared.
-    desk: &'a Desk,
+    /// Which pairs are the run's last.
+    desk: &'a LastPairs,
+    /// Where the pipeline's tests see whether two workers compute at once.
+    #[cfg(test)]
+    overlap: Option<&'a tests::Overlap>,
 }
 
 impl Worker<'_> {
@@ -726,17 +471,13 @@ impl Worker<'_> {
             // and keep every other worker waiting.
             let next = jobs.lock().expect("no worker panics holding it").recv();
             let Ok(job) = next else {
-                // No pair left: help finish one of the last.
-                if !stop.load(Ordering::SeqCst) {
-                    self.desk.help(&mut self.engine);
-                }
                 return;
             };
             if stop.load(Ordering::SeqCst) {
                 continue;
             }
             #[cfg(test)]
-            let _inside = self.compute.overlap.as_ref().map(|o| o.enter());
+            let _inside = self.overlap.map(|o| o.enter());
             let msg = self.job_message(&job, &buffers.payloads);
             // The last of the two jobs (and the reader) to use a frame hands it back.
             for frame in [job.prev, job.next] {
@@ -788,7 +529,7 @@ impl Worker<'_> {
         let (prev, next) = (&job.prev.gray, &job.next.gray);
         let stem = job.stem();
         if self.needs_fields {
-            let fields = self.compute.pair_with(&mut self.engine, prev, next)?;
+            let fields = self.engine.fields(prev, next)?;
             if let Some(dir) = self.dir {
                 // A folder is the run's one destination: the fields go to it.
                 dir.write(&stem, fields)?;
@@ -819,13 +560,14 @@ impl Worker<'_> {
         );
         let image: &mut [u8] = match self.stream {
             Some((_, StreamFormat::Rgb24)) => {
-                self.compute
-                    .job_representation(&mut self.engine, job, self.desk, payload)?;
+                let last = self.desk.shares(job.index);
+                self.engine.representation(prev, next, payload, last)?;
                 payload.bytes()
             }
             _ => {
-                self.compute
-                    .job_representation(&mut self.engine, job, self.desk, &mut self.rgb)?;
+                let last = self.desk.shares(job.index);
+                self.engine
+                    .representation(prev, next, &mut self.rgb, last)?;
                 &mut self.rgb
             }
         };
@@ -1086,7 +828,10 @@ fn renamed_file(path: &std::path::Path, from: &str, to: &str) -> std::path::Path
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Gray;
     use crate::sequence::index_stem;
+    use crate::settings::{EngineKind, ScaleArg};
+    use reynoldsflow_core::IntensityScale;
 
     /// `n` small moving frames, then an error if `fail`.
     struct Frames {
@@ -1146,10 +891,31 @@ mod tests {
         threads: usize,
         keep_count: bool,
     ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
+        stream_on(compute, n, fail, threads, keep_count, None)
+    }
+
+    /// `n` frames on `threads` workers, each entering `overlap` while it
+    /// computes.
+    fn stream_overlapping(
+        n: usize,
+        threads: usize,
+        overlap: Option<&Overlap>,
+    ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
+        stream_on(&fixed_compute(), n, false, threads, false, overlap)
+    }
+
+    fn stream_on(
+        compute: &Compute,
+        n: usize,
+        fail: bool,
+        threads: usize,
+        keep_count: bool,
+        overlap: Option<&Overlap>,
+    ) -> (Result<Summary, HostError>, Vec<u8>, usize) {
         let spec = OutputSpec::default();
         let mut bytes = Vec::new();
         let mut calls = 0;
-        let result = process(
+        let result = process_with(
             &mut Frames { next: 0, n, fail },
             compute,
             Destination::Stream {
@@ -1165,6 +931,7 @@ mod tests {
                 record_frames: false,
             },
             &mut || calls += 1,
+            overlap,
         );
         (result, bytes, calls)
     }
@@ -1205,14 +972,32 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_pair_is_one_of_the_last_once_the_end_is_known() {
+        let last = LastPairs::new(2);
+        assert!(!last.shares(29), "before the end is known");
+        last.end_input(31);
+        assert!(last.shares(29) && !last.shares(28));
+        let last = LastPairs::new(3);
+        last.end_input(31);
+        assert!(last.shares(28) && !last.shares(27));
+        let last = LastPairs::new(4);
+        last.end_input(2);
+        assert!(last.shares(0));
+        let last = LastPairs::new(1);
+        last.end_input(31);
+        assert!(
+            (0..30).all(|pair| !last.shares(pair)),
+            "one worker spreads nothing"
+        );
+    }
+
     /// Two workers compute two pairs at the same time (a worker that kept
     /// the job queue's lock while computing would serialise them).
     #[test]
     fn workers_compute_pairs_at_the_same_time() {
-        let mut compute = fixed_compute();
-        let overlap = std::sync::Arc::new(Overlap::default());
-        compute.overlap = Some(overlap.clone());
-        let (summary, _, _) = stream_with(&compute, 6, false, 2, false);
+        let overlap = Overlap::default();
+        let (summary, _, _) = stream_overlapping(6, 2, Some(&overlap));
         assert_eq!(summary.unwrap().results, 5);
         assert!(
             overlap.met(),

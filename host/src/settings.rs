@@ -3,14 +3,11 @@
 //! forms. Each front end maps its own names onto these (the CLI's flags,
 //! the GStreamer element's properties, Python's keywords, the ROS 2 node's
 //! parameters); an error names the [`Setting`] at fault, and each front end
-//! prints that under its own name ([`HostError::Setting`]).
+//! prints that under its own name ([`HostError::Setting`](crate::HostError::Setting)).
 
 use std::fmt;
 
 use reynoldsflow_core::IntensityScale;
-
-use crate::HostError;
-use crate::outputs::Variant;
 
 /// A setting's value drawn from a fixed list of names (an engine, a
 /// variant): how front ends list and parse the choices without restating them.
@@ -69,6 +66,27 @@ pub enum EngineKind {
     /// The fixed-point core, bit for bit what embedded targets compute.
     Fixed,
 }
+
+/// The representation variants (the paper's ablation), and the colour wheel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Variant {
+    /// [|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4).
+    #[default]
+    Dc,
+    /// [|v_d|, 0, f]: ablation without the curl-free magnitude.
+    Dc0,
+    /// [|v_c|, |v_d|, f]: ablation with the magnitudes swapped.
+    Cd,
+    /// Middlebury colour wheel of v_R = v_c + v_d.
+    Hsv,
+}
+
+choices!(Variant {
+    Dc => "dc", "[|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4)";
+    Dc0 => "dc0", "[|v_d|, 0, f]: ablation without the curl-free magnitude";
+    Cd => "cd", "[|v_c|, |v_d|, f]: ablation with the magnitudes swapped";
+    Hsv => "hsv", "Middlebury colour wheel of v_R = v_c + v_d";
+});
 
 choices!(EngineKind {
     Fixed => "fixed", "The fixed-point core, bit for bit what embedded targets compute";
@@ -290,39 +308,6 @@ impl Default for Settings {
 }
 
 impl Settings {
-    /// The checked computation of a pair (engine, scale, intensity scale,
-    /// λ, tile), or the setting at fault.
-    pub fn compute(&self) -> Result<crate::pipeline::Compute, HostError> {
-        if let Some(k) = self.hsv_max
-            && !(k.is_finite() && k > 0.0)
-        {
-            return Err(HostError::setting(
-                Setting::HsvMax,
-                format!("{k}; expected a positive number of pixels"),
-            ));
-        }
-        // Both engines: the float reference would refuse it only per pair.
-        if !(self.lambda.is_finite() && self.lambda > 0.0) {
-            return Err(HostError::setting(
-                Setting::Lambda,
-                format!("{}; expected a positive number (e.g. 1e-4)", self.lambda),
-            ));
-        }
-        if self.threads == Some(0) {
-            return Err(HostError::setting(
-                Setting::Threads,
-                "0; expected at least 1",
-            ));
-        }
-        crate::pipeline::Compute::new(
-            self.engine,
-            self.scale,
-            self.intensity_scale,
-            self.lambda,
-            self.tile,
-        )
-    }
-
     /// The worker threads: as set, or every core.
     pub fn threads(&self) -> usize {
         self.threads.unwrap_or_else(|| {
@@ -439,6 +424,7 @@ pub fn parse_ratio(s: &str) -> Result<(u32, u32), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::HostError;
 
     #[test]
     fn ratios_are_exact_and_reduced() {

@@ -7,8 +7,9 @@ use std::io::Cursor;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use reynoldsflow_core::IntensityScale;
+use reynoldsflow_host::engine::Compute;
 use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
-use reynoldsflow_host::pipeline::{self, Compute, Destination, Options};
+use reynoldsflow_host::pipeline::{self, Destination, Options};
 use reynoldsflow_host::sequence::y4m::Y4mSource;
 use reynoldsflow_host::settings::{EngineKind, ScaleArg};
 

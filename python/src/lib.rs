@@ -17,8 +17,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use reynoldsflow_host::dataset::{self, Record, Shard};
+use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::outputs::flo;
-use reynoldsflow_host::pair_engine::PairEngine;
 use reynoldsflow_host::pair_stream::{self, PairStream};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};

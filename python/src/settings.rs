@@ -10,11 +10,11 @@ use pyo3::types::{PyDict, PyFloat, PyString, PyTuple};
 use reynoldsflow_core::IntensityScale;
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::ItemSettings;
+use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::outputs::{
     self, DEFAULT_JPEG_QUALITY, Fields, ImageFormat, JpegSubsampling, NpyDtype, OutputSpec,
     PngCompression, Variant,
 };
-use reynoldsflow_host::pair_engine::PairEngine;
 use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate};
 use reynoldsflow_host::settings::{
     self, EngineKind, FirstFrame, ScaleArg, Settings, TileSize, parse_choice,

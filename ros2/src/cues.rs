@@ -56,7 +56,7 @@ pub fn detections(header: &Header, regions: &[Region]) -> Detection2DArray {
 #[cfg(test)]
 mod tests {
     use reynoldsflow_host::cues::Cues;
-    use reynoldsflow_host::pair_engine::Magnitudes;
+    use reynoldsflow_host::engine::Magnitudes;
     use reynoldsflow_host::settings::Settings;
 
     use super::*;

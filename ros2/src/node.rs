@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use reynoldsflow_cues::{CueError, Region};
 use reynoldsflow_host::cues::Cues;
-use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::pair_stream::{Frame, Output, PairStream};
 use reynoldsflow_host::{Gray, HostError};
 use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token};

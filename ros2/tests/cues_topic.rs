@@ -227,7 +227,7 @@ fn cues_end_to_end() {
         let (a, b) = (frame(n), frame(n + 1));
         let (a, b) = (Gray::new(W, H, a).unwrap(), Gray::new(W, H, b).unwrap());
         let fields = compute.pair(&a, &b).unwrap();
-        let fixed = reynoldsflow_host::fixed_engine::compute_fixed(
+        let fixed = reynoldsflow_host::engine::compute_fixed(
             &a,
             &b,
             reynoldsflow_core::Params::DEFAULT,
@@ -241,7 +241,7 @@ fn cues_end_to_end() {
             .zip(&fixed.m_c)
             .map(|(&d, &c)| (d as f32, c as f32))
             .unzip();
-        let magnitudes = reynoldsflow_host::pair_engine::Magnitudes {
+        let magnitudes = reynoldsflow_host::engine::Magnitudes {
             width: W,
             height: H,
             m_d: &m_d,

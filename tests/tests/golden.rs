@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 use fixed::types::U16F16;
 use reynoldsflow_core::{Params, Scaling};
-use reynoldsflow_host::fixed_engine::{FixedOutput, compute_fixed};
+use reynoldsflow_host::engine::{FixedOutput, compute_fixed};
 use reynoldsflow_host::image_io;
 use reynoldsflow_tests::{vector_cases, vectors_dir};
 

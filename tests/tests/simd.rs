@@ -8,8 +8,8 @@
 
 use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{IntensityScale, Params, Scaling};
-use reynoldsflow_host::dispatch::{self, Isa};
-use reynoldsflow_host::fixed_engine::compute_fixed_on;
+use reynoldsflow_host::engine::bytes::{self, Isa};
+use reynoldsflow_host::engine::compute_fixed_on;
 use reynoldsflow_host::{Gray, image_io};
 use reynoldsflow_tests::{Pattern, frame_pair, vector_cases, vectors_dir};
 
@@ -35,7 +35,7 @@ fn same_on_both(
         assert!(
             best == portable,
             "{what}, tile {tile:?}, {scaling:?}: {} and portable differ",
-            dispatch::best_name()
+            bytes::best_name()
         );
     }
 }
@@ -45,14 +45,10 @@ fn the_cpu_has_what_the_suite_requires() {
     let required = std::env::var_os("REYNOLDSFLOW_REQUIRE_AVX2").is_some_and(|v| v == "1");
     println!(
         "engine pass compared: {} against portable",
-        dispatch::best_name()
+        bytes::best_name()
     );
     if required {
-        assert_eq!(
-            dispatch::best_name(),
-            "avx2",
-            "AVX2 required but not detected"
-        );
+        assert_eq!(bytes::best_name(), "avx2", "AVX2 required but not detected");
     }
 }
 
@@ -99,6 +95,6 @@ fn simd_and_portable_agree_on_generated_pairs() {
     }
     println!(
         "{pairs} generated pairs identical on {}",
-        dispatch::best_name()
+        bytes::best_name()
     );
 }

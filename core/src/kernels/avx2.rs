@@ -63,7 +63,9 @@ impl Job<'_> {
     /// The same job, its structure sums and tail run in AVX2 lanes (the
     /// same bytes): for hosts that found AVX2 and FMA at run time.
     pub fn with_avx2(self, avx2: Avx2) -> Self {
-        self.with_kernels(super::Choice { avx2: Some(avx2) })
+        let mut job = self;
+        job.kernels = super::Choice { avx2: Some(avx2) };
+        job
     }
 }
 

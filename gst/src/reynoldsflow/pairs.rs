@@ -9,7 +9,7 @@ use gst_video::prelude::*;
 use reynoldsflow_cues::Region;
 use reynoldsflow_host::Gray;
 use reynoldsflow_host::cues::{self as host_cues, Cues};
-use reynoldsflow_host::pair_engine::PairEngine;
+use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::settings::Settings;
 
 use super::message;

@@ -7,11 +7,11 @@ use std::hint::black_box;
 
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling};
-use reynoldsflow_host::dispatch::{self, Isa, Pass};
+use reynoldsflow_host::engine::bytes::{self, Isa, Pass};
 /// Output columns of the strips of the compile-time engine the benches
 /// time (`Engine<COLS>`, arrays in a box, as a board would hold them);
 /// `reynoldsflow run` takes the host's wider strips
-/// (`fixed_engine::strip_width`).
+/// (`engine::bands::strip_width`).
 pub const STRIPS: usize = 128;
 
 /// Window columns of those strips.
@@ -48,7 +48,7 @@ pub fn core_engine<const N: usize>(
     move || {
         let frames = FramePair::packed(&config, &prev, &next).unwrap();
         let pass = Pass::Represent(scaling, black_box(&mut rgb));
-        dispatch::run(isa, &mut engine, &plan, &frames, pass, &mut ()).unwrap();
+        bytes::run(isa, &mut engine, &plan, &frames, pass, &mut ()).unwrap();
     }
 }
 

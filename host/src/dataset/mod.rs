@@ -39,8 +39,9 @@ use std::time::Instant;
 use serde_json::json;
 
 use crate::HostError;
+use crate::engine::Compute;
 use crate::outputs::{DirWriter, ImageFormat, OutputSpec};
-use crate::pipeline::{self, Compute, Destination, Options, Summary};
+use crate::pipeline::{self, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
 use crate::sequence::sampled::FramePlan;
 use crate::sequence::{self, FrameSource, InputSpec, input_error};

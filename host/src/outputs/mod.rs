@@ -28,10 +28,11 @@ use std::sync::{Arc, Mutex};
 
 use npyz::WriterBuilder;
 
+use crate::engine::Image;
 pub use crate::image_io::{JpegSubsampling, PngCompression};
 use crate::page_buffer::ByteBuffer;
 use crate::settings::choices;
-use crate::{FlowPlanes, HostError, atomic, image_io, viz};
+use crate::{HostError, atomic, image_io};
 use background::Stage;
 
 mod background;
@@ -40,26 +41,8 @@ pub mod crash_injection;
 pub mod flo;
 pub mod shards;
 
-/// The representation variants (the paper's ablation), and the colour wheel.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Variant {
-    /// [|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4).
-    #[default]
-    Dc,
-    /// [|v_d|, 0, f]: ablation without the curl-free magnitude.
-    Dc0,
-    /// [|v_c|, |v_d|, f]: ablation with the magnitudes swapped.
-    Cd,
-    /// Middlebury colour wheel of v_R = v_c + v_d.
-    Hsv,
-}
-
-choices!(Variant {
-    Dc => "dc", "[|v_d|, |v_c|, f]: the ReynoldsFlow representation (SPEC 4)";
-    Dc0 => "dc0", "[|v_d|, 0, f]: ablation without the curl-free magnitude";
-    Cd => "cd", "[|v_c|, |v_d|, f]: ablation with the magnitudes swapped";
-    Hsv => "hsv", "Middlebury colour wheel of v_R = v_c + v_d";
-});
+pub use crate::engine::PairFields;
+pub use crate::settings::Variant;
 
 /// A field written by `--npy` and `--flo`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -196,15 +179,6 @@ pub fn parse_fields(s: &str) -> Result<Vec<Field>, String> {
     Ok(fields)
 }
 
-/// One result: the fields of a frame pair and its representation.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PairFields {
-    /// `v_c` and `v_d`.
-    pub planes: FlowPlanes,
-    /// The representation `[|v_d|, |v_c|, fⁿ]`, RGB8.
-    pub rep: Vec<u8>,
-}
-
 impl PairFields {
     /// The `(x, y)` planes of a field.
     pub fn field(&self, field: Field) -> (Vec<f64>, Vec<f64>) {
@@ -271,7 +245,7 @@ impl OutputSpec {
     /// Whether the `--variant` image is made from the fields (the colour
     /// wheel) rather than from the representation's bytes alone.
     pub fn image_needs_fields(&self) -> bool {
-        self.variant == Variant::Hsv
+        self.shown().needs_fields()
     }
 
     /// Whether any output of a result needs the fields, not only the
@@ -285,28 +259,29 @@ impl OutputSpec {
 
     /// The RGB8 image of the `--variant`.
     pub fn image(&self, f: &PairFields) -> Vec<u8> {
-        if self.image_needs_fields() {
-            return self.hsv(f);
-        }
-        let mut rgb = f.rep.clone();
-        self.arrange(&mut rgb);
-        rgb
+        self.shown().of(f)
     }
 
     /// Turn the representation `[|v_d|, |v_c|, f]` into the `--variant`'s
-    /// image in place; a no-op for the colour wheel, which is made from
-    /// the fields instead ([`Self::image_needs_fields`]).
+    /// image in place ([`Image::arrange`]).
     pub fn arrange(&self, rgb: &mut [u8]) {
-        match self.variant {
-            Variant::Dc | Variant::Hsv => {}
-            Variant::Dc0 => rgb.chunks_exact_mut(3).for_each(|p| p[1] = 0),
-            Variant::Cd => rgb.chunks_exact_mut(3).for_each(|p| p.swap(0, 1)),
+        self.shown().arrange(rgb);
+    }
+
+    /// The colour wheel (`DIR/hsv/`), whatever the `--variant`.
+    fn wheel(&self) -> Image {
+        Image {
+            variant: Variant::Hsv,
+            hsv_max: self.hsv_max,
         }
     }
 
-    fn hsv(&self, f: &PairFields) -> Vec<u8> {
-        let (u, v) = f.field(Field::VR);
-        viz::flow_to_rgb(&u, &v, self.hsv_max)
+    /// The image the `--variant` shows.
+    pub fn shown(&self) -> Image {
+        Image {
+            variant: self.variant,
+            hsv_max: self.hsv_max,
+        }
     }
 
     /// Sub-folders of the output folder this spec writes into.
@@ -331,7 +306,7 @@ impl OutputSpec {
             files.push(self.image_file(stem, w, h, &self.image(f))?);
         }
         if self.viz {
-            let image = self.image_format.encode(w, h, &self.hsv(f))?;
+            let image = self.image_format.encode(w, h, &self.wheel().of(f))?;
             let name = format!("{stem}.{}", self.image_format.extension());
             files.push((Path::new("hsv").join(name), image));
         }
@@ -785,7 +760,7 @@ pub fn clean_stale_temps(dir: &Path) -> Result<usize, HostError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Flow;
+    use crate::{Flow, FlowPlanes};
 
     fn fields() -> PairFields {
         PairFields {

@@ -5,8 +5,8 @@
 //! computes only with integers, so both copies give the same bytes
 //! (tested in `tests/tests/simd.rs`). Per-frame min–max's byte step, which
 //! runs after the pass, is compiled the same two ways, and where the CPU has
-//! AVX2 takes its lanes through intrinsics (`avx2_bytes`; tested in
-//! `fixed_engine`).
+//! AVX2 takes its lanes through intrinsics (`bytes/avx2.rs`; tested in
+//! `engine::lane`).
 
 use multiversion::multiversion;
 use multiversion::target::{match_target, target_cfg_f};
@@ -14,7 +14,11 @@ use reynoldsflow_core::{
     ByteScale, Error, FramePair, Job, Memory, Plan, Scaling, Sink, TileEngine,
 };
 
-use crate::fixed_engine::bytes_from_kept;
+use portable::bytes_from_kept;
+
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+mod portable;
 
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -151,7 +155,7 @@ fn baseline<K: Kind, M: Memory, S: Sink>(
     kind.pass(engine, &plan.bind(*frames)?, sink)
 }
 
-/// The second step of per-frame min–max (`fixed_engine::bytes_from_kept`),
+/// The second step of per-frame min–max (`portable::bytes_from_kept`),
 /// compiled for `isa` like the pass: its 64-bit multiplies and compares
 /// take AVX2's lanes.
 pub(crate) fn kept_to_bytes(
@@ -193,7 +197,7 @@ best_targets! {
         }
     }
 
-    /// Where the CPU has AVX2, the step in its lanes (`avx2_bytes`);
+    /// Where the CPU has AVX2, the step in its lanes (`avx2.rs`);
     /// elsewhere the portable step compiled for the clone's target.
     fn kept_to_bytes_best(
         kept: [&[f32]; 2],
@@ -202,7 +206,7 @@ best_targets! {
         scales: &[ByteScale; 2],
     ) {
         match_target! {
-            "x86_64+avx2" => crate::avx2_bytes::kept_to_bytes(kept, luma, rgb, scales),
+            "x86_64+avx2" => crate::engine::bytes::avx2::kept_to_bytes(kept, luma, rgb, scales),
             _ => bytes_from_kept(kept, luma, rgb, scales),
         }
     }

@@ -3,7 +3,7 @@
 //! the same bytes as [`bytes_from_kept`], which takes the last pixels.
 //! Runs only in the AVX2 compilation of `dispatch`, which calls it where
 //! the CPU has AVX2 (`multiversion`'s `target_cfg`); tested against the
-//! portable step in `fixed_engine`'s RGB-path test and `tests/tests/simd.rs`.
+//! portable step in `engine::lane`'s tests and `tests/tests/simd.rs`.
 //!
 //! Written with intrinsics: compiled from the portable step, the
 //! interleaving of the three channels took some 100 shuffles, blends and
@@ -21,7 +21,7 @@ use std::arch::x86_64::{
 
 use reynoldsflow_core::ByteScale;
 
-use crate::fixed_engine::bytes_from_kept;
+use super::portable::bytes_from_kept;
 
 /// Pixels a step: four vectors of eight magnitudes per channel, one of 32
 /// bytes of `fⁿ`, three of 32 output bytes.
