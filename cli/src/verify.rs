@@ -7,17 +7,18 @@
 
 use std::path::PathBuf;
 
+use super::captured::{Captured, CapturedFormat};
+use super::compare::{Comparison, Difference, Outcome};
 use super::limits::LimitArgs;
 use super::progress::Progress;
 use super::run::{
     EngineArgs, OutputArgs, RawInputArgs, count, install_interrupt_handler, progress_total,
 };
 use reynoldsflow_host::HostError;
-use reynoldsflow_host::captured::{Captured, CapturedFormat};
-use reynoldsflow_host::compare::{Comparison, Difference, Outcome};
 use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
 use reynoldsflow_host::pipeline::{self, Compute, Destination, Options};
 use reynoldsflow_host::sequence::{self, InputSpec, Peeked};
+use reynoldsflow_host::settings::Choice;
 
 /// Shown by `reynoldsflow verify --help`.
 pub const EXAMPLES: &str = "\

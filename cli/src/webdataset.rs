@@ -1,5 +1,5 @@
 //! `dataset SRC DST --webdataset`: the items' results as WebDataset
-//! samples in tar shards ([`reynoldsflow_host::outputs::shards`]) instead of folders.
+//! samples in tar shards ([`crate::shards`]) instead of folders.
 //!
 //! A sample's key is `<item path>/<result stem>` (the item's output path
 //! relative to DST, `/`-separated, and the stem `dataset` names its files
@@ -33,7 +33,7 @@ use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::{
     Item, ItemRunner, Outcome, Shard, StatusLog, commit, record, shard_key,
 };
-use reynoldsflow_host::outputs::shards::{self, ShardNames, ShardWriter};
+use crate::shards::{self, ShardNames, ShardWriter};
 use reynoldsflow_host::pipeline::{self, Destination, Sample, SampleSink, Summary};
 use reynoldsflow_host::sequence::input_error;
 

@@ -22,8 +22,6 @@
 pub mod atomic;
 #[cfg(target_arch = "x86_64")]
 mod avx2_bytes;
-pub mod captured;
-pub mod compare;
 pub mod cues;
 pub mod dataset;
 mod decoder_guard;
@@ -44,6 +42,7 @@ pub mod reference;
 pub mod sequence;
 pub mod settings;
 mod shared_pair;
+pub mod stop;
 pub mod viz;
 pub mod workers;
 

@@ -33,11 +33,8 @@ use crate::reference::{self, FloatParams, FloatScaling};
 use crate::sequence::{Frame, FrameSource};
 use crate::settings::{EngineKind, ScaleArg, Setting, TileSize};
 use crate::shared_pair::{Desk, SharedPair};
+use crate::stop::Stop;
 use crate::{Gray, HostError};
-
-/// Set when the user asks the process to stop (Ctrl-C): no new pair is
-/// started, pairs in flight finish, and the run reports the interruption.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// The computation of one pair: engine and parameters, checked once.
 #[derive(Clone, Debug)]
@@ -380,7 +377,7 @@ pub enum Destination<'a> {
 }
 
 /// How a sequence is run.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Options {
     /// Worker threads (at least 1).
     pub threads: usize,
@@ -393,6 +390,9 @@ pub struct Options {
     pub pair_names: bool,
     /// Keep the input index of every frame used ([`Summary::source_frames`]).
     pub record_frames: bool,
+    /// Set to stop the run: no new pair is started, pairs in flight
+    /// finish, and the run fails as interrupted.
+    pub stop: Stop,
 }
 
 /// One result as a sample: its files and what it came from.
@@ -573,13 +573,14 @@ pub fn process(
     let result = std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
         let stop = &stop;
+        let reader_options = options.clone();
         scope.spawn(move || {
             let links = ReaderLinks {
                 jobs: job_tx,
                 tokens: token_rx,
                 msgs: reader_tx,
             };
-            read_pairs(source, options, links, stop, &buffers.frames, desk)
+            read_pairs(source, reader_options, links, stop, &buffers.frames, desk)
         });
         for _ in 0..threads {
             let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
@@ -599,6 +600,7 @@ pub fn process(
         let collector = Collector {
             tokens: Some(token_tx),
             stop,
+            interrupt: &options.stop,
             payloads: &buffers.payloads,
             dir,
             stream: stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
@@ -647,7 +649,7 @@ fn read_pairs(
         if stop.load(Ordering::SeqCst) {
             return;
         }
-        if INTERRUPTED.load(Ordering::SeqCst) {
+        if options.stop.is_stopped() {
             let _ = msgs.send(Msg::InputFailed(interrupted()));
             return;
         }
@@ -892,6 +894,8 @@ struct Collector<'a, 'w, 'o> {
     /// unblock it when the run stops.
     tokens: Option<SyncSender<()>>,
     stop: &'a AtomicBool,
+    /// The run's stop token ([`Options::stop`]).
+    interrupt: &'a Stop,
     payloads: &'a Pool<PageBytes>,
     dir: Option<&'a DirWriter>,
     stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
@@ -972,7 +976,7 @@ impl Collector<'_, '_, '_> {
         if let Some(e) = self.error.take().or(input_error) {
             return Err(e);
         }
-        if INTERRUPTED.load(Ordering::SeqCst) {
+        if self.interrupt.is_stopped() {
             return Err(interrupted());
         }
         if self.closed {
@@ -1163,6 +1167,7 @@ mod tests {
                 max_frames: None,
                 pair_names: false,
                 record_frames: false,
+                stop: Stop::new(),
             },
             &mut || calls += 1,
         );

@@ -38,7 +38,6 @@ mod background;
 #[cfg(feature = "crash-injection")]
 pub mod crash_injection;
 pub mod flo;
-pub mod shards;
 
 /// The representation variants (the paper's ablation), and the colour wheel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

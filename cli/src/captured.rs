@@ -17,9 +17,10 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
-use crate::sequence::{folder, input_error, peek, read_full, y4m};
-use crate::settings::choices;
-use crate::{HostError, image_io};
+use reynoldsflow_host::limits::Limits;
+use reynoldsflow_host::sequence::{folder, input_error, peek, read_full, y4m};
+use reynoldsflow_host::settings::Choice;
+use reynoldsflow_host::{HostError, image_io};
 
 /// The format of a capture (`--captured-format`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,11 +33,27 @@ pub enum CapturedFormat {
     PngDir,
 }
 
-choices!(CapturedFormat {
-    Rgb24 => "rgb24", "Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24)";
-    Y4m => "y4m", "YUV4MPEG2 C444 (run --out - --format y4m), compared in YCbCr";
-    PngDir => "png-dir", "A folder of RGB8 PNGs in natural order of their names (run --out DIR)";
-});
+impl Choice for CapturedFormat {
+    const ALL: &'static [Self] = &[Self::Rgb24, Self::Y4m, Self::PngDir];
+    fn name(self) -> &'static str {
+        match self {
+            Self::Rgb24 => "rgb24",
+            Self::Y4m => "y4m",
+            Self::PngDir => "png-dir",
+        }
+    }
+    fn help(self) -> &'static str {
+        match self {
+            Self::Rgb24 => {
+                "Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24)"
+            }
+            Self::Y4m => "YUV4MPEG2 C444 (run --out - --format y4m), compared in YCbCr",
+            Self::PngDir => {
+                "A folder of RGB8 PNGs in natural order of their names (run --out DIR)"
+            }
+        }
+    }
+}
 
 impl CapturedFormat {
     /// The format a path implies: a folder is `png-dir`, a `.y4m` file
