@@ -128,17 +128,20 @@ pub struct Captured {
     frames: Frames,
     /// Frames read so far.
     read: usize,
+    /// What a frame file's or the stream's header may state.
+    limits: Limits,
 }
 
 impl Captured {
     /// Open `path` (`-`: standard input) as frames of `width × height`,
     /// in `format`, or the format the path implies. Fails, naming the
     /// capture, when it cannot be read in that format or holds frames of
-    /// another size.
+    /// another size; no header over `limits` is believed.
     pub fn open(
         path: &Path,
         format: Option<CapturedFormat>,
         (width, height): (usize, usize),
+        limits: Limits,
     ) -> Result<Self, HostError> {
         let stdin = path.as_os_str() == "-";
         let name = if stdin {
@@ -156,7 +159,7 @@ impl Captured {
             Box::new(BufReader::new(io::stdin()))
         } else {
             if format == Some(CapturedFormat::PngDir) || path.is_dir() {
-                return Self::open_dir(path, format, (width, height));
+                return Self::open_dir(path, format, (width, height), limits);
             }
             let file = File::open(path).map_err(|e| HostError::io(path, e))?;
             Box::new(BufReader::new(file))
@@ -172,7 +175,7 @@ impl Captured {
         };
         let y4m = format == CapturedFormat::Y4m;
         if y4m {
-            read_y4m_header(&mut *reader, &name, (width, height))?;
+            read_y4m_header(&mut *reader, &name, (width, height), limits)?;
         }
         Ok(Self {
             name,
@@ -181,6 +184,7 @@ impl Captured {
             height,
             frames: Frames::Stream { reader, y4m },
             read: 0,
+            limits,
         })
     }
 
@@ -188,6 +192,7 @@ impl Captured {
         path: &Path,
         format: Option<CapturedFormat>,
         (width, height): (usize, usize),
+        limits: Limits,
     ) -> Result<Self, HostError> {
         match format {
             Some(CapturedFormat::PngDir) if !path.is_dir() => {
@@ -228,6 +233,7 @@ impl Captured {
             height,
             frames: Frames::Pngs(files),
             read: 0,
+            limits,
         })
     }
 
@@ -270,7 +276,7 @@ impl Captured {
                 let Some(file) = files.get(index) else {
                     return Ok(false);
                 };
-                let image = image_io::read_rgb8(file)?;
+                let image = image_io::read_rgb8(file, self.limits)?;
                 if (image.width, image.height) != (w, h) {
                     return Err(input_error(
                         file,
@@ -318,13 +324,14 @@ fn read_y4m_header(
     reader: &mut dyn BufRead,
     name: &Path,
     (width, height): (usize, usize),
+    limits: Limits,
 ) -> Result<(), HostError> {
     let line = match y4m::read_line(reader) {
         Ok(Some(line)) => line,
         Ok(None) => return Err(input_error(name, "empty; expected a Y4M header")),
         Err(e) => return Err(input_error(name, e)),
     };
-    let header = y4m::parse_header(&line).map_err(|e| e.about(name))?;
+    let header = y4m::parse_header(&line, limits).map_err(|e| e.about(name))?;
     if header.chroma != "444" {
         return Err(input_error(
             name,
@@ -430,6 +437,7 @@ mod tests {
                 &mut io::Cursor::new(h.as_bytes()),
                 Path::new("c.y4m"),
                 (2, 1),
+                Limits::default(),
             )
             .map_err(|e| e.to_string())
         };

@@ -17,6 +17,7 @@ pub mod limits;
 pub mod pair;
 mod progress;
 pub mod run;
+pub mod scheduler;
 pub mod shards;
 pub mod values;
 pub mod verify;

@@ -24,7 +24,6 @@
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fs;
 use std::path::Path;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use serde_json::{Value, json};
@@ -291,7 +290,7 @@ impl Shards<'_> {
         let mut log_error = None;
         let mut results_done = 0usize;
         for ((&i, key), hash) in todo.iter().zip(&keys).zip(hashes) {
-            if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
+            if self.runner.options.stop.is_stopped() {
                 break;
             }
             let item = &self.items[i];
@@ -367,7 +366,12 @@ impl Shards<'_> {
                 ));
             }
             let mut frames =
-                reynoldsflow_host::dataset::open_item(&item.src, item.frames, &runner.plan)?;
+                reynoldsflow_host::dataset::open_item(
+                    &item.src,
+                    item.frames,
+                    &runner.plan,
+                    runner.limits,
+                )?;
             let mut sink = ItemSamples {
                 writer: &mut *writer,
                 rel: &item.rel,
@@ -384,7 +388,7 @@ impl Shards<'_> {
                     spec: &runner.spec,
                     sink: &mut sink,
                 },
-                runner.options,
+                runner.options.clone(),
                 on_output,
             )?;
             if summary.frames == 0 {
@@ -398,7 +402,7 @@ impl Shards<'_> {
         };
         match ended {
             Ok(summary) => Outcome::Done(summary),
-            Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
+            Err(_) if runner.options.stop.is_stopped() => Outcome::Interrupted,
             Err(e) => Outcome::Failed(e.to_string()),
         }
     }

@@ -136,7 +136,7 @@ pub enum ImageFormatName {
 
 choices!(ImageFormatName {
     Png => "png", "Lossless PNG (the default)";
-    Jpg => "jpg", "Lossy JPEG (--jpeg-quality)";
+    Jpg => "jpg", "Lossy JPEG, at the JPEG quality set";
 });
 
 /// The JPEG quality when `--jpeg-quality` is not given.
