@@ -48,9 +48,7 @@ impl Choice for CapturedFormat {
                 "Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24)"
             }
             Self::Y4m => "YUV4MPEG2 C444 (run --out - --format y4m), compared in YCbCr",
-            Self::PngDir => {
-                "A folder of RGB8 PNGs in natural order of their names (run --out DIR)"
-            }
+            Self::PngDir => "A folder of RGB8 PNGs in natural order of their names (run --out DIR)",
         }
     }
 }
@@ -398,6 +396,7 @@ mod tests {
                 y4m,
             },
             read: 0,
+            limits: Limits::default(),
         }
     }
 

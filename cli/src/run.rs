@@ -446,11 +446,11 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
     install_interrupt_handler();
     let started = Instant::now();
     let name = sequence::display_name(&input);
-    let mut source = args
-        .output
-        .frames
-        .plan()
-        .wrap(sequence::open(&input, limits)?, &name, limits)?;
+    let mut source =
+        args.output
+            .frames
+            .plan()
+            .wrap(sequence::open(&input, limits)?, &name, limits)?;
     let options = args.output.options(&args.engine);
     let progress = Progress::new(progress_total(&*source, &options), "results");
     let mut tick = || progress.inc();

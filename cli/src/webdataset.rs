@@ -28,11 +28,11 @@ use std::time::Instant;
 
 use serde_json::{Value, json};
 
+use crate::shards::{self, ShardNames, ShardWriter};
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::{
     Item, ItemRunner, Outcome, Shard, StatusLog, commit, record, shard_key,
 };
-use crate::shards::{self, ShardNames, ShardWriter};
 use reynoldsflow_host::pipeline::{self, Destination, Sample, SampleSink, Summary};
 use reynoldsflow_host::sequence::input_error;
 
@@ -365,13 +365,12 @@ impl Shards<'_> {
                     "the path is not UTF-8, and WebDataset keys are text; rename it",
                 ));
             }
-            let mut frames =
-                reynoldsflow_host::dataset::open_item(
-                    &item.src,
-                    item.frames,
-                    &runner.plan,
-                    runner.limits,
-                )?;
+            let mut frames = reynoldsflow_host::dataset::open_item(
+                &item.src,
+                item.frames,
+                &runner.plan,
+                runner.limits,
+            )?;
             let mut sink = ItemSamples {
                 writer: &mut *writer,
                 rel: &item.rel,

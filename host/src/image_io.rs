@@ -16,8 +16,8 @@ use image::{
     DynamicImage, ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageReader,
 };
 
-use crate::settings::choices;
 use crate::limits::Limits;
+use crate::settings::choices;
 use crate::{Gray, HostError, ImageProblem, atomic, decoder_guard};
 
 /// An RGB8 image, row-major, `3 · width · height` bytes.
@@ -341,18 +341,30 @@ mod tests {
     #[test]
     fn colour_goes_through_bt601_and_alpha_is_ignored() {
         let rgb = png(ExtendedColorType::Rgb8, 2, 1, &[255, 0, 0, 0, 0, 255]);
-        assert_eq!(decode_gray(&rgb, Limits::default()).unwrap().pixels, vec![76, 29]);
+        assert_eq!(
+            decode_gray(&rgb, Limits::default()).unwrap().pixels,
+            vec![76, 29]
+        );
         let rgba = png(
             ExtendedColorType::Rgba8,
             2,
             1,
             &[255, 0, 0, 0, 0, 0, 255, 7],
         );
-        assert_eq!(decode_gray(&rgba, Limits::default()).unwrap().pixels, vec![76, 29]);
+        assert_eq!(
+            decode_gray(&rgba, Limits::default()).unwrap().pixels,
+            vec![76, 29]
+        );
         let la = png(ExtendedColorType::La8, 2, 1, &[9, 0, 200, 255]);
-        assert_eq!(decode_gray(&la, Limits::default()).unwrap().pixels, vec![9, 200]);
+        assert_eq!(
+            decode_gray(&la, Limits::default()).unwrap().pixels,
+            vec![9, 200]
+        );
         let ppm = [b"P6 1 1 255\n".as_slice(), &[0, 255, 0]].concat();
-        assert_eq!(decode_gray(&ppm, Limits::default()).unwrap().pixels, vec![150]);
+        assert_eq!(
+            decode_gray(&ppm, Limits::default()).unwrap().pixels,
+            vec![150]
+        );
     }
 
     #[test]
@@ -368,7 +380,10 @@ mod tests {
             Err(ImageProblem::Maxval { maxval: 65535 })
         );
         let p2_15 = b"P2 1 1 15\n7\n";
-        assert_eq!(decode_gray(p2_15, Limits::default()), Err(ImageProblem::Maxval { maxval: 15 }));
+        assert_eq!(
+            decode_gray(p2_15, Limits::default()),
+            Err(ImageProblem::Maxval { maxval: 15 })
+        );
         assert_eq!(
             decode_gray(b"hello world", Limits::default()),
             Err(ImageProblem::UnknownFormat)
@@ -393,7 +408,8 @@ mod tests {
                 .unwrap();
             out
         };
-        let gray = decode_gray(&jpeg(ExtendedColorType::L8, &[200; 64]), Limits::default()).unwrap();
+        let gray =
+            decode_gray(&jpeg(ExtendedColorType::L8, &[200; 64]), Limits::default()).unwrap();
         assert_eq!(gray.size(), (8, 8));
         assert!(
             gray.pixels.iter().all(|&p| p.abs_diff(200) <= 1),

@@ -247,8 +247,7 @@ pub fn open(spec: &InputSpec, limits: Limits) -> Result<Box<dyn FrameSource>, Ho
         } => {
             let file = File::open(path).map_err(|e| HostError::io(path, e))?;
             let len = file.metadata().ok().map(|m| m.len());
-            let mut source =
-                raw::RawSource::new(
+            let mut source = raw::RawSource::new(
                 path.clone(),
                 Box::new(io::BufReader::new(file)),
                 *w,

@@ -6,8 +6,8 @@ use std::io::Read;
 use std::path::PathBuf;
 
 use super::{Frame, FrameSource, index_stem, input_error, read_full};
-use crate::settings::Setting;
 use crate::limits::Limits;
+use crate::settings::Setting;
 use crate::{Gray, HostError};
 
 /// Raw frames read from any reader.
@@ -121,14 +121,14 @@ mod tests {
     #[test]
     fn whole_frames_then_a_clear_truncation() {
         let bytes: Vec<u8> = (0..14).collect();
-        let mut src =
-            RawSource::new(
-                "stdin".into(),
-                Box::new(std::io::Cursor::new(bytes)),
-                3,
-                2,
-                Limits::default(),
-            ).unwrap();
+        let mut src = RawSource::new(
+            "stdin".into(),
+            Box::new(std::io::Cursor::new(bytes)),
+            3,
+            2,
+            Limits::default(),
+        )
+        .unwrap();
         assert_eq!(
             src.next_frame().unwrap().unwrap().gray.pixels,
             [0, 1, 2, 3, 4, 5]

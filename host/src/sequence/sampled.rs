@@ -11,8 +11,8 @@
 use reynoldsflow_cues::resample::{MAX_SIDE, Resize};
 
 use super::{Frame, FrameSource};
-use crate::settings::Setting;
 use crate::limits::Limits;
+use crate::settings::Setting;
 use crate::{Gray, HostError};
 
 /// A frame rate in frames per second, as an exact ratio `num / den`.

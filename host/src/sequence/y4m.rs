@@ -316,7 +316,11 @@ mod tests {
     /// character split inside it and panicked.
     #[test]
     fn a_non_ascii_tag_is_ignored_not_a_panic() {
-        let header = parse_header("YUV4MPEG2 W3 H2 Cmono \u{152}noo".as_bytes(), Limits::default()).unwrap();
+        let header = parse_header(
+            "YUV4MPEG2 W3 H2 Cmono \u{152}noo".as_bytes(),
+            Limits::default(),
+        )
+        .unwrap();
         assert_eq!((header.width, header.height), (3, 2));
         let crash: &[u8] = b"YUV4MPEG2 H\0\0\x003 F30000:1 Ip A1:1 Cmono XF3 300YUV4MPEG2 W3 \xc5\x92noo XYSCSS=420J;PEG";
         assert!(parse_header(crash, Limits::default()).is_err());
