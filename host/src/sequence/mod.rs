@@ -236,7 +236,7 @@ pub fn open(spec: &InputSpec, limits: Limits) -> Result<Box<dyn FrameSource>, Ho
             Err(HostError::setting(
                 Setting::Raw,
                 format!(
-                    "{} {what}; raw 8-bit gray frames need their size WxH set here, or pipe Y4M (e.g. ffmpeg -i clip.mp4 -f yuv4mpegpipe -pix_fmt gray -)",
+                    "{} {what}; give the size WxH of raw 8-bit gray frames, or pipe Y4M (e.g. ffmpeg -i clip.mp4 -f yuv4mpegpipe -pix_fmt gray -)",
                     name.display()
                 ),
             ))
