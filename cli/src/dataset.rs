@@ -22,10 +22,10 @@ use reynoldsflow_host::dataset::{
     shard::parse_shard, shard_key,
 };
 use reynoldsflow_host::sequence::input_error;
-use reynoldsflow_host::{HostError, pipeline, workers};
+use reynoldsflow_host::{HostError, workers};
 
 use super::progress::Progress;
-use super::run::{EngineArgs, OutputArgs, count, install_interrupt_handler};
+use super::run::{EngineArgs, OutputArgs, count, install_interrupt_handler, interrupt_token};
 
 /// Examples shown by `reynoldsflow dataset --help`.
 pub const EXAMPLES: &str = "\
@@ -114,7 +114,8 @@ pub struct DatasetArgs {
 impl DatasetArgs {
     /// What every item is made with.
     pub fn item_settings(&self) -> ItemSettings {
-        self.output.item_settings(&self.engine)
+        self.output
+            .item_settings(&self.engine, self.limits.limits())
     }
 }
 
@@ -138,7 +139,7 @@ fn which_shard(args: &DatasetArgs) -> Result<Shard, HostError> {
     if let Some(shard) = args.shard {
         return Ok(shard);
     }
-    match Shard::from_scheduler(|name| std::env::var(name).ok(), args.shards)? {
+    match super::scheduler::from_scheduler(|name| std::env::var(name).ok(), args.shards)? {
         Some((shard, from)) => {
             eprintln!(
                 "reynoldsflow: shard {}/{} from {from} (--shard 0/1 takes every item)",
@@ -152,7 +153,6 @@ fn which_shard(args: &DatasetArgs) -> Result<Shard, HostError> {
 
 /// Run the subcommand: check, find the items, run them, report.
 pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
-    args.limits.apply();
     let shard = which_shard(args)?;
     let threads = args.engine.threads();
     // Checked before anything is created; the workers' share is set below.
@@ -214,7 +214,7 @@ pub fn run(args: &DatasetArgs) -> Result<(), HostError> {
         }
     }
     let failures = report(args, shard, all.len(), &items, &outcomes, started);
-    if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
+    if interrupt_token().is_stopped() {
         return Err(HostError::io(
             &args.dst,
             std::io::Error::new(
@@ -349,7 +349,7 @@ impl ItemsRun<'_> {
             todo.len(),
             || (),
             |(), k| {
-                let interrupted = pipeline::INTERRUPTED.load(Ordering::SeqCst);
+                let interrupted = interrupt_token().is_stopped();
                 (!interrupted).then(|| {
                     (
                         todo[k],

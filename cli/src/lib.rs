@@ -9,12 +9,16 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 pub mod budget;
+pub mod captured;
+pub mod compare;
 pub mod dataset;
 pub mod eval;
 pub mod limits;
 pub mod pair;
 mod progress;
 pub mod run;
+pub mod scheduler;
+pub mod shards;
 pub mod values;
 pub mod verify;
 pub mod webdataset;

@@ -1,7 +1,7 @@
 //! `--max-pixels`: the input size limit of [`reynoldsflow_host::limits`], as a flag of
 //! every subcommand that reads frames.
 
-use reynoldsflow_host::limits;
+use reynoldsflow_host::limits::{self, Limits};
 
 /// The input limits (shared by `pair`, `run` and `dataset`).
 #[derive(Debug, clap::Args)]
@@ -16,8 +16,8 @@ pub struct LimitArgs {
 }
 
 impl LimitArgs {
-    /// Make the limit the process's, before any input is opened.
-    pub fn apply(&self) {
-        limits::set_max_pixels(self.max_pixels);
+    /// The limits every input of the command is read within.
+    pub fn limits(&self) -> Limits {
+        Limits::new(self.max_pixels)
     }
 }

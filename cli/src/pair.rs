@@ -32,10 +32,10 @@ pub struct PairArgs {
 
 /// Run the subcommand.
 pub fn run(args: &PairArgs) -> Result<(), HostError> {
-    args.limits.apply();
+    let limits = args.limits.limits();
     let compute = args.compute.compute()?;
-    let prev = image_io::read_gray(&args.f0)?;
-    let next = image_io::read_gray(&args.f1)?;
+    let prev = image_io::read_gray(&args.f0, limits)?;
+    let next = image_io::read_gray(&args.f1, limits)?;
     if prev.size() != next.size() {
         return Err(HostError::FrameSizes {
             prev_path: args.f0.clone(),

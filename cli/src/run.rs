@@ -3,8 +3,7 @@
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Once;
-use std::sync::atomic::Ordering;
+use std::sync::{LazyLock, Once};
 use std::time::Instant;
 
 use reynoldsflow_core::IntensityScale;
@@ -14,6 +13,7 @@ use super::values::choice;
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::ItemSettings;
 use reynoldsflow_host::engine::Compute;
+use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::outputs::{
     self, DEFAULT_JPEG_QUALITY, DirWriter, Fields, ImageFormat, ImageFormatName, JpegSubsampling,
     NpyDtype, OutputSpec, PngCompression, StreamFormat, Variant,
@@ -22,6 +22,7 @@ use reynoldsflow_host::pipeline::{self, Destination, Options, Summary};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan, FrameSize, Rate};
 use reynoldsflow_host::sequence::{self, FrameSource, InputSpec};
 use reynoldsflow_host::settings::{self, EngineKind, ScaleArg, Settings, TileSize};
+use reynoldsflow_host::stop::Stop;
 
 /// Examples shown by `reynoldsflow run --help`.
 pub const EXAMPLES: &str = "\
@@ -252,8 +253,9 @@ impl OutputArgs {
         }
     }
 
-    /// What `dataset` makes of each item with these flags and `engine`'s.
-    pub fn item_settings(&self, engine: &EngineArgs) -> ItemSettings {
+    /// What `dataset` makes of each item with these flags and `engine`'s,
+    /// its frames read within `limits`, stopped by Ctrl-C.
+    pub fn item_settings(&self, engine: &EngineArgs, limits: Limits) -> ItemSettings {
         let spec = self.spec();
         ItemSettings {
             settings: Settings {
@@ -265,12 +267,16 @@ impl OutputArgs {
             keep_count: self.keep_count,
             max_frames: self.max_frames,
             plan: self.frames.plan(),
+            limits,
+            stop: interrupt_token(),
         }
     }
 
-    /// Pipeline options on `engine`'s threads.
+    /// Pipeline options on `engine`'s threads, stopped by Ctrl-C.
     pub fn options(&self, engine: &EngineArgs) -> Options {
-        self.item_settings(engine).options(engine.threads())
+        // The options do not read input: no limits apply.
+        self.item_settings(engine, Limits::default())
+            .options(engine.threads())
     }
 
     /// The checks of the file-type flags beyond clap's (a bad command
@@ -377,15 +383,25 @@ fn parse_size(s: &str) -> Result<(usize, usize), String> {
         .map_err(|_| "expected WxH with both sides at least 1 (e.g. 640x480)".to_owned())
 }
 
-/// Stop cleanly on Ctrl-C (and SIGTERM): pairs in flight finish, no new
-/// one starts; a second Ctrl-C ends the process at once.
+/// The command's stop token: set by Ctrl-C (and SIGTERM) once
+/// [`install_interrupt_handler`] has run, and given to every operation
+/// the command starts.
+pub fn interrupt_token() -> Stop {
+    static STOP: LazyLock<Stop> = LazyLock::new(Stop::new);
+    STOP.clone()
+}
+
+/// Stop cleanly on Ctrl-C (and SIGTERM): [`interrupt_token`] is set, so
+/// pairs in flight finish and no new one starts; a second Ctrl-C ends the
+/// process at once.
 pub fn install_interrupt_handler() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
+        let stop = interrupt_token();
         // Without a handler the default (immediate exit) stays: still no partial file
         // under a final name, only hidden temps that the next run removes.
-        let _ = ctrlc::set_handler(|| {
-            if pipeline::INTERRUPTED.swap(true, Ordering::SeqCst) {
+        let _ = ctrlc::set_handler(move || {
+            if stop.stop() {
                 std::process::exit(130);
             }
         });
@@ -399,7 +415,7 @@ pub fn count(n: usize, unit: &str) -> String {
 
 /// Run the subcommand.
 pub fn run(args: &RunArgs) -> Result<(), HostError> {
-    args.limits.apply();
+    let limits = args.limits.limits();
     let compute = args.engine.compute.compute()?;
     let spec = args.output.spec();
     let to_stdout = args.out.as_os_str() == "-";
@@ -431,11 +447,11 @@ pub fn run(args: &RunArgs) -> Result<(), HostError> {
     install_interrupt_handler();
     let started = Instant::now();
     let name = sequence::display_name(&input);
-    let mut source = args
-        .output
-        .frames
-        .plan()
-        .wrap(sequence::open(&input)?, &name)?;
+    let mut source =
+        args.output
+            .frames
+            .plan()
+            .wrap(sequence::open(&input, limits)?, &name, limits)?;
     let options = args.output.options(&args.engine);
     let progress = Progress::new(progress_total(&*source, &options), "results");
     let mut tick = || progress.inc();

@@ -7,18 +7,20 @@
 
 use std::path::PathBuf;
 
+use super::captured::{Captured, CapturedFormat};
+use super::compare::{Comparison, Difference, Outcome};
 use super::limits::LimitArgs;
 use super::progress::Progress;
 use super::run::{
     EngineArgs, OutputArgs, RawInputArgs, count, install_interrupt_handler, progress_total,
 };
 use reynoldsflow_host::HostError;
-use reynoldsflow_host::captured::{Captured, CapturedFormat};
-use reynoldsflow_host::compare::{Comparison, Difference, Outcome};
 use reynoldsflow_host::engine::Compute;
+use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
 use reynoldsflow_host::pipeline::{self, Destination, Options};
 use reynoldsflow_host::sequence::{self, InputSpec, Peeked};
+use reynoldsflow_host::settings::Choice;
 
 /// Shown by `reynoldsflow verify --help`.
 pub const EXAMPLES: &str = "\
@@ -103,15 +105,14 @@ pub struct Plan {
     compute: Compute,
     spec: OutputSpec,
     options: Options,
+    limits: Limits,
     tolerance: u8,
 }
 
-/// Check the command line beyond what clap checks, and make --max-pixels
-/// the process's. Every failure here is a bad command line (exit status
+/// Check the command line beyond what clap checks. Every failure here is a bad command line (exit status
 /// 2), so that status 1 always means that the capture failed, or that it
 /// or the input could not be read.
 pub fn prepare(args: &VerifyArgs) -> Result<Plan, HostError> {
-    args.limits.apply();
     let out = &args.output;
     let refused = [
         (out.no_rep, "--no-rep"),
@@ -158,6 +159,7 @@ pub fn prepare(args: &VerifyArgs) -> Result<Plan, HostError> {
         compute,
         spec,
         options: out.options(&args.engine),
+        limits: args.limits.limits(),
         tolerance: args.tolerance,
     })
 }
@@ -167,11 +169,11 @@ pub fn prepare(args: &VerifyArgs) -> Result<Plan, HostError> {
 pub fn run(plan: &Plan) -> Result<(), HostError> {
     install_interrupt_handler();
     let input_name = sequence::display_name(&plan.input);
-    let Some(mut source) = Peeked::new(sequence::open(&plan.input)?)? else {
+    let Some(mut source) = Peeked::new(sequence::open(&plan.input, plan.limits)?)? else {
         return Err(sequence::input_error(&input_name, "no frames"));
     };
     let (width, height) = source.size();
-    let mut captured = Captured::open(&plan.captured, plan.format, (width, height))?;
+    let mut captured = Captured::open(&plan.captured, plan.format, (width, height), plan.limits)?;
     let progress = Progress::new(progress_total(&source, &plan.options), "frames");
     let mut comparison = Comparison::new(&mut captured, width, plan.tolerance);
     let summary = pipeline::process(
@@ -182,7 +184,7 @@ pub fn run(plan: &Plan) -> Result<(), HostError> {
             format: StreamFormat::Rgb24,
             writer: &mut comparison,
         },
-        plan.options,
+        plan.options.clone(),
         &mut || progress.inc(),
     );
     progress.finish();

@@ -1,5 +1,5 @@
 //! `dataset SRC DST --webdataset`: the items' results as WebDataset
-//! samples in tar shards ([`reynoldsflow_host::outputs::shards`]) instead of folders.
+//! samples in tar shards ([`crate::shards`]) instead of folders.
 //!
 //! A sample's key is `<item path>/<result stem>` (the item's output path
 //! relative to DST, `/`-separated, and the stem `dataset` names its files
@@ -24,16 +24,15 @@
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fs;
 use std::path::Path;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use serde_json::{Value, json};
 
+use crate::shards::{self, ShardNames, ShardWriter};
 use reynoldsflow_host::HostError;
 use reynoldsflow_host::dataset::{
     Item, ItemRunner, Outcome, Shard, StatusLog, commit, record, shard_key,
 };
-use reynoldsflow_host::outputs::shards::{self, ShardNames, ShardWriter};
 use reynoldsflow_host::pipeline::{self, Destination, Sample, SampleSink, Summary};
 use reynoldsflow_host::sequence::input_error;
 
@@ -291,7 +290,7 @@ impl Shards<'_> {
         let mut log_error = None;
         let mut results_done = 0usize;
         for ((&i, key), hash) in todo.iter().zip(&keys).zip(hashes) {
-            if pipeline::INTERRUPTED.load(Ordering::SeqCst) {
+            if self.runner.options.stop.is_stopped() {
                 break;
             }
             let item = &self.items[i];
@@ -366,8 +365,12 @@ impl Shards<'_> {
                     "the path is not UTF-8, and WebDataset keys are text; rename it",
                 ));
             }
-            let mut frames =
-                reynoldsflow_host::dataset::open_item(&item.src, item.frames, &runner.plan)?;
+            let mut frames = reynoldsflow_host::dataset::open_item(
+                &item.src,
+                item.frames,
+                &runner.plan,
+                runner.limits,
+            )?;
             let mut sink = ItemSamples {
                 writer: &mut *writer,
                 rel: &item.rel,
@@ -384,7 +387,7 @@ impl Shards<'_> {
                     spec: &runner.spec,
                     sink: &mut sink,
                 },
-                runner.options,
+                runner.options.clone(),
                 on_output,
             )?;
             if summary.frames == 0 {
@@ -398,7 +401,7 @@ impl Shards<'_> {
         };
         match ended {
             Ok(summary) => Outcome::Done(summary),
-            Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
+            Err(_) if runner.options.stop.is_stopped() => Outcome::Interrupted,
             Err(e) => Outcome::Failed(e.to_string()),
         }
     }

@@ -10,6 +10,7 @@ use std::path::Path;
 
 use reynoldsflow_cues::resample::Resize;
 use reynoldsflow_host::Gray;
+use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::outputs::decode_npy_xy;
 use run_support::*;
 
@@ -204,8 +205,11 @@ fn resize_and_short_side_give_the_resampled_frames_pairs() {
         assert!(err.contains(&format!("of {w}x{h} of")), "{err}");
         assert_eq!(names(&out, ".png"), ["000000.png", "000001.png"]);
         for k in 0..2 {
-            let png =
-                reynoldsflow_host::image_io::read_rgb8(&out.join(format!("{k:06}.png"))).unwrap();
+            let png = reynoldsflow_host::image_io::read_rgb8(
+                &out.join(format!("{k:06}.png")),
+                Limits::default(),
+            )
+            .unwrap();
             assert_eq!((png.width, png.height), (w, h), "{flags:?}");
             let (a, b) = (resized(&frames[k], w, h), resized(&frames[k + 1], w, h));
             assert_eq!(png.bytes, pair_rgb(tmp.path(), &format!("{w}-{k}"), &a, &b));

@@ -242,6 +242,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use reynoldsflow_host::limits::Limits;
 
     #[test]
     fn a_figure_renders_to_a_png_with_ink() {
@@ -272,7 +273,7 @@ mod tests {
             size: (500, 300),
         };
         let png = fig.to_png().unwrap();
-        let img = image_io::decode_gray(&png).unwrap();
+        let img = image_io::decode_gray(&png, Limits::default()).unwrap();
         assert_eq!(img.size(), (500, 300));
         let dark = img.pixels.iter().filter(|&&p| p < 128).count();
         assert!(dark > 1000, "{dark} dark pixels");

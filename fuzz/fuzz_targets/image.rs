@@ -8,11 +8,11 @@ use reynoldsflow_fuzz::small_limit;
 use reynoldsflow_host::image_io;
 
 fuzz_target!(|data: &[u8]| {
-    small_limit();
-    if let Ok(gray) = image_io::decode_gray(data) {
+    let limits = small_limit();
+    if let Ok(gray) = image_io::decode_gray(data, limits) {
         let (w, h) = gray.size();
         assert!(w > 0 && h > 0);
         assert_eq!(gray.pixels.len(), w * h);
-        assert!((w * h) as u64 <= reynoldsflow_host::limits::max_pixels());
+        assert!((w * h) as u64 <= limits.max_pixels());
     }
 });

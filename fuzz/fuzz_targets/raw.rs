@@ -9,7 +9,7 @@ use reynoldsflow_host::sequence::FrameSource;
 use reynoldsflow_host::sequence::raw::RawSource;
 
 fuzz_target!(|data: &[u8]| {
-    small_limit();
+    let limits = small_limit();
     let [w0, w1, h0, h1, chunking, rest @ ..] = data else {
         return;
     };
@@ -21,6 +21,7 @@ fuzz_target!(|data: &[u8]| {
         Box::new(Chunked::new(rest.to_vec(), *chunking)),
         width,
         height,
+        limits,
     ) else {
         return;
     };

@@ -11,13 +11,13 @@ use reynoldsflow_host::sequence::FrameSource;
 use reynoldsflow_host::sequence::y4m::Y4mSource;
 
 fuzz_target!(|data: &[u8]| {
-    small_limit();
+    let limits = small_limit();
     let Some((&chunking, bytes)) = data.split_first() else {
         return;
     };
     let len = bytes.len() as u64;
     let reader = BufReader::new(Chunked::new(bytes.to_vec(), chunking));
-    let Ok(mut source) = Y4mSource::new("fuzz.y4m".into(), Box::new(reader), Some(len)) else {
+    let Ok(mut source) = Y4mSource::new("fuzz.y4m".into(), Box::new(reader), Some(len), limits) else {
         return;
     };
     let (w, h) = (source.header().width, source.header().height);

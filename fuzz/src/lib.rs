@@ -3,7 +3,7 @@
 
 use std::io::{self, Read};
 
-use reynoldsflow_host::limits;
+use reynoldsflow_host::limits::Limits;
 
 /// A reader over `bytes` whose reads return 1 to 64 bytes at a time (a
 /// pattern seeded by `chunking`), with an `Interrupted` error now and
@@ -52,6 +52,6 @@ impl Read for Chunked {
 /// A pixel limit of 2²⁰ for the readers: the same checks as the default
 /// limit, but a header that passes them allocates megabytes, not the
 /// default's 64 MiB, so the fuzzer keeps its pace.
-pub fn small_limit() {
-    limits::set_max_pixels(1 << 20);
+pub fn small_limit() -> Limits {
+    Limits::new(1 << 20)
 }

@@ -16,8 +16,9 @@ use image::{
     DynamicImage, ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageReader,
 };
 
+use crate::limits::Limits;
 use crate::settings::choices;
-use crate::{Gray, HostError, ImageProblem, atomic, decoder_guard, limits};
+use crate::{Gray, HostError, ImageProblem, atomic, decoder_guard};
 
 /// An RGB8 image, row-major, `3 · width · height` bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -44,17 +45,19 @@ fn decode_error(e: image::ImageError) -> ImageProblem {
     ImageProblem::Decode(e.to_string())
 }
 
-/// The decoder, if the size its header states is within [`limits`].
-fn within_limit<D: ImageDecoder>(decoder: D) -> Result<D, ImageProblem> {
+/// The decoder, if the size its header states is within `limits`.
+fn within_limit<D: ImageDecoder>(decoder: D, limits: Limits) -> Result<D, ImageProblem> {
     let (w, h) = decoder.dimensions();
-    limits::check_frame_size(w as usize, h as usize).map_err(ImageProblem::TooLarge)?;
+    limits
+        .check_frame_size(w as usize, h as usize)
+        .map_err(ImageProblem::TooLarge)?;
     Ok(decoder)
 }
 
 /// Decode any supported container into an image of 8-bit samples or fail.
-/// The header's size is checked against [`limits`] before the pixels are
+/// The header's size is checked against the [`Limits`] before the pixels are
 /// decoded, so a header claiming a huge image costs nothing.
-fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
+fn decode(bytes: &[u8], limits: Limits) -> Result<DynamicImage, ImageProblem> {
     let format = sniff(bytes).ok_or(ImageProblem::UnknownFormat)?;
     let image = if format == ImageFormat::Pnm {
         let decoder = PnmDecoder::new(Cursor::new(bytes)).map_err(decode_error)?;
@@ -62,7 +65,7 @@ fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
         if maxval != 255 {
             return Err(ImageProblem::Maxval { maxval });
         }
-        DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)?
+        DynamicImage::from_decoder(within_limit(decoder, limits)?).map_err(decode_error)?
     } else {
         // PNG and JPEG through their crates, whose panics on malformed
         // data are refusals too.
@@ -70,7 +73,7 @@ fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
             let decoder = ImageReader::with_format(Cursor::new(bytes), format)
                 .into_decoder()
                 .map_err(decode_error)?;
-            DynamicImage::from_decoder(within_limit(decoder)?).map_err(decode_error)
+            DynamicImage::from_decoder(within_limit(decoder, limits)?).map_err(decode_error)
         })
         .map_err(|panic| {
             ImageProblem::Decode(format!(
@@ -98,8 +101,8 @@ fn decode(bytes: &[u8]) -> Result<DynamicImage, ImageProblem> {
 }
 
 /// Decode an image file's bytes into a gray frame (SPEC §1).
-pub fn decode_gray(bytes: &[u8]) -> Result<Gray, ImageProblem> {
-    let image = decode(bytes)?;
+pub fn decode_gray(bytes: &[u8], limits: Limits) -> Result<Gray, ImageProblem> {
+    let image = decode(bytes, limits)?;
     let (width, height) = (image.width() as usize, image.height() as usize);
     let pixels: Vec<u8> = match image {
         DynamicImage::ImageLuma8(b) => b.into_raw(),
@@ -122,13 +125,13 @@ fn gray_or_empty(gray: Result<Gray, HostError>) -> Result<Gray, ImageProblem> {
 }
 
 /// Read an 8-bit image file as a gray frame.
-pub fn read_gray(path: &Path) -> Result<Gray, HostError> {
+pub fn read_gray(path: &Path, limits: Limits) -> Result<Gray, HostError> {
     let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
-    decode_gray(&bytes).map_err(|problem| image_error(path, problem))
+    decode_gray(&bytes, limits).map_err(|problem| image_error(path, problem))
 }
 
 /// The error of refusing the image file `path`: one over the size limit
-/// names the limit's setting ([`limits::TooLarge::about`]).
+/// names the limit's setting ([`crate::limits::TooLarge::about`]).
 fn image_error(path: &Path, problem: ImageProblem) -> HostError {
     match problem {
         ImageProblem::TooLarge(too_large) => too_large.about(path.display()),
@@ -141,10 +144,10 @@ fn image_error(path: &Path, problem: ImageProblem) -> HostError {
 
 /// Read an RGB8 image file (a representation), exactly as stored; any
 /// other pixel layout is refused.
-pub fn read_rgb8(path: &Path) -> Result<Rgb8, HostError> {
+pub fn read_rgb8(path: &Path, limits: Limits) -> Result<Rgb8, HostError> {
     let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
     let refuse = |problem| image_error(path, problem);
-    match decode(&bytes).map_err(refuse)? {
+    match decode(&bytes, limits).map_err(refuse)? {
         DynamicImage::ImageRgb8(b) => Ok(Rgb8 {
             width: b.width() as usize,
             height: b.height() as usize,
@@ -306,7 +309,7 @@ mod tests {
         let bytes = include_bytes!("../tests/data/jpeg-decoder-panic.jpg");
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            let Err(ImageProblem::Decode(message)) = decode_gray(bytes) else {
+            let Err(ImageProblem::Decode(message)) = decode_gray(bytes, Limits::default()) else {
                 panic!("decoded or refused otherwise");
             };
             assert!(
@@ -314,7 +317,7 @@ mod tests {
                 "{message}"
             );
         }
-        match decode_gray(bytes) {
+        match decode_gray(bytes, Limits::default()) {
             Ok(gray) => assert_eq!(gray.pixels.len(), gray.width * gray.height),
             Err(ImageProblem::Decode(_)) => {}
             Err(other) => panic!("unexpected error: {other}"),
@@ -325,12 +328,12 @@ mod tests {
     fn reads_pgm_binary_and_ascii() {
         let p5 = [b"P5\n# a comment\n3 1\n255\n".as_slice(), &[0, 128, 255]].concat();
         assert_eq!(
-            decode_gray(&p5).unwrap(),
+            decode_gray(&p5, Limits::default()).unwrap(),
             Gray::new(3, 1, vec![0, 128, 255]).unwrap()
         );
         let p2 = b"P2 2 2 255\n 1 2\n 3 255\n";
         assert_eq!(
-            decode_gray(p2).unwrap(),
+            decode_gray(p2, Limits::default()).unwrap(),
             Gray::new(2, 2, vec![1, 2, 3, 255]).unwrap()
         );
     }
@@ -338,44 +341,59 @@ mod tests {
     #[test]
     fn colour_goes_through_bt601_and_alpha_is_ignored() {
         let rgb = png(ExtendedColorType::Rgb8, 2, 1, &[255, 0, 0, 0, 0, 255]);
-        assert_eq!(decode_gray(&rgb).unwrap().pixels, vec![76, 29]);
+        assert_eq!(
+            decode_gray(&rgb, Limits::default()).unwrap().pixels,
+            vec![76, 29]
+        );
         let rgba = png(
             ExtendedColorType::Rgba8,
             2,
             1,
             &[255, 0, 0, 0, 0, 0, 255, 7],
         );
-        assert_eq!(decode_gray(&rgba).unwrap().pixels, vec![76, 29]);
+        assert_eq!(
+            decode_gray(&rgba, Limits::default()).unwrap().pixels,
+            vec![76, 29]
+        );
         let la = png(ExtendedColorType::La8, 2, 1, &[9, 0, 200, 255]);
-        assert_eq!(decode_gray(&la).unwrap().pixels, vec![9, 200]);
+        assert_eq!(
+            decode_gray(&la, Limits::default()).unwrap().pixels,
+            vec![9, 200]
+        );
         let ppm = [b"P6 1 1 255\n".as_slice(), &[0, 255, 0]].concat();
-        assert_eq!(decode_gray(&ppm).unwrap().pixels, vec![150]);
+        assert_eq!(
+            decode_gray(&ppm, Limits::default()).unwrap().pixels,
+            vec![150]
+        );
     }
 
     #[test]
     fn refuses_wide_samples_other_maxvals_and_unknown_data() {
         let l16 = png(ExtendedColorType::L16, 1, 1, &[1, 2]);
         assert_eq!(
-            decode_gray(&l16),
+            decode_gray(&l16, Limits::default()),
             Err(ImageProblem::NotEightBit { bits: 16 })
         );
         let p5_16 = [b"P5 1 1 65535\n".as_slice(), &[1, 2]].concat();
         assert_eq!(
-            decode_gray(&p5_16),
+            decode_gray(&p5_16, Limits::default()),
             Err(ImageProblem::Maxval { maxval: 65535 })
         );
         let p2_15 = b"P2 1 1 15\n7\n";
-        assert_eq!(decode_gray(p2_15), Err(ImageProblem::Maxval { maxval: 15 }));
         assert_eq!(
-            decode_gray(b"hello world"),
+            decode_gray(p2_15, Limits::default()),
+            Err(ImageProblem::Maxval { maxval: 15 })
+        );
+        assert_eq!(
+            decode_gray(b"hello world", Limits::default()),
             Err(ImageProblem::UnknownFormat)
         );
         assert!(matches!(
-            decode_gray(b"P5 4 4 255\n\x01\x02"),
+            decode_gray(b"P5 4 4 255\n\x01\x02", Limits::default()),
             Err(ImageProblem::Decode(_))
         ));
         assert!(matches!(
-            decode_gray(&[0xff, 0xd8, 0xff, 0]),
+            decode_gray(&[0xff, 0xd8, 0xff, 0], Limits::default()),
             Err(ImageProblem::Decode(_))
         ));
     }
@@ -390,7 +408,8 @@ mod tests {
                 .unwrap();
             out
         };
-        let gray = decode_gray(&jpeg(ExtendedColorType::L8, &[200; 64])).unwrap();
+        let gray =
+            decode_gray(&jpeg(ExtendedColorType::L8, &[200; 64]), Limits::default()).unwrap();
         assert_eq!(gray.size(), (8, 8));
         assert!(
             gray.pixels.iter().all(|&p| p.abs_diff(200) <= 1),
@@ -399,7 +418,7 @@ mod tests {
         );
         // Pure green, lossy: luma near 150.
         let green: Vec<u8> = (0..64).flat_map(|_| [0, 255, 0]).collect();
-        let gray = decode_gray(&jpeg(ExtendedColorType::Rgb8, &green)).unwrap();
+        let gray = decode_gray(&jpeg(ExtendedColorType::Rgb8, &green), Limits::default()).unwrap();
         assert!(
             gray.pixels.iter().all(|&p| p.abs_diff(150) <= 3),
             "{:?}",
@@ -496,7 +515,7 @@ mod tests {
         let rgb: Vec<u8> = (0..2 * 3 * 3).map(|i| (i * 14) as u8).collect();
         write_png(&path, 3, 2, &rgb).unwrap();
         assert_eq!(
-            read_rgb8(&path).unwrap(),
+            read_rgb8(&path, Limits::default()).unwrap(),
             Rgb8 {
                 width: 3,
                 height: 2,

@@ -20,8 +20,6 @@
 #![deny(missing_docs)]
 
 pub mod atomic;
-pub mod captured;
-pub mod compare;
 pub mod content_hash;
 pub mod cues;
 pub mod dataset;
@@ -40,6 +38,7 @@ pub mod pipeline;
 pub mod reference;
 pub mod sequence;
 pub mod settings;
+pub mod stop;
 pub mod viz;
 pub mod workers;
 

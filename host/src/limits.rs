@@ -1,15 +1,14 @@
 //! Resource limits on input. A header states a frame's size before its
 //! pixels arrive; a corrupt or hostile one (`W100000 H100000`) must be
 //! refused before anything of that size is allocated, not after the
-//! allocator gives up. Every reader checks the size it is told against
-//! [`max_pixels`] first.
+//! allocator gives up. Every reader is given the [`Limits`] of its
+//! operation and checks the size it is told against them first.
 //!
-//! The limit is one setting of the process ([`Setting::MaxPixels`]), made
-//! once by the front end (the CLI's `--max-pixels`, Python's
-//! `set_max_pixels`) before any input is opened, so the readers deep in the
-//! sequence sources need no extra parameter.
-
-use std::sync::atomic::{AtomicU64, Ordering};
+//! The limits are a value passed to each operation that reads input (as
+//! image-rs passes its `Limits` to a decoder), not a setting of the
+//! process: two operations of one process may read under different limits.
+//! A front end maps its own name onto [`Setting::MaxPixels`] (the CLI's
+//! `--max-pixels`, Python's `set_max_pixels`).
 
 use crate::HostError;
 use crate::settings::Setting;
@@ -18,16 +17,47 @@ use crate::settings::Setting;
 /// is half of it). A gray frame of that size is 64 MiB.
 pub const DEFAULT_MAX_PIXELS: u64 = 8192 * 8192;
 
-static MAX_PIXELS: AtomicU64 = AtomicU64::new(DEFAULT_MAX_PIXELS);
-
-/// The largest frame (width × height) any reader accepts.
-pub fn max_pixels() -> u64 {
-    MAX_PIXELS.load(Ordering::Relaxed)
+/// What one operation's readers accept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    max_pixels: u64,
 }
 
-/// Set the limit for every reader of this process (at least 1).
-pub fn set_max_pixels(n: u64) {
-    MAX_PIXELS.store(n.max(1), Ordering::Relaxed);
+impl Default for Limits {
+    /// [`DEFAULT_MAX_PIXELS`].
+    fn default() -> Self {
+        Self {
+            max_pixels: DEFAULT_MAX_PIXELS,
+        }
+    }
+}
+
+impl Limits {
+    /// Frames of at most `max_pixels` pixels (width × height; at least 1).
+    pub fn new(max_pixels: u64) -> Self {
+        Self {
+            max_pixels: max_pixels.max(1),
+        }
+    }
+
+    /// The largest frame (width × height) a reader accepts.
+    pub fn max_pixels(self) -> u64 {
+        self.max_pixels
+    }
+
+    /// `Err` when a `width × height` frame exceeds the limit (or its pixel
+    /// count overflows).
+    pub fn check_frame_size(self, width: usize, height: usize) -> Result<(), TooLarge> {
+        let limit = self.max_pixels;
+        match (width as u64).checked_mul(height as u64) {
+            Some(n) if n <= limit => Ok(()),
+            _ => Err(TooLarge {
+                width,
+                height,
+                limit,
+            }),
+        }
+    }
 }
 
 /// A frame larger than the limit: what a reader was told, refused before
@@ -65,35 +95,22 @@ impl std::fmt::Display for TooLarge {
     }
 }
 
-/// `Err` when a `width × height` frame exceeds the limit (or its pixel
-/// count overflows).
-pub fn check_frame_size(width: usize, height: usize) -> Result<(), TooLarge> {
-    let limit = max_pixels();
-    match (width as u64).checked_mul(height as u64) {
-        Some(n) if n <= limit => Ok(()),
-        _ => Err(TooLarge {
-            width,
-            height,
-            limit,
-        }),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn refuses_above_the_default_and_overflowing_sizes() {
-        assert_eq!(max_pixels(), DEFAULT_MAX_PIXELS);
-        assert!(check_frame_size(8192, 8192).is_ok());
-        let err = check_frame_size(8192, 8193).unwrap_err();
+        let limits = Limits::default();
+        assert_eq!(limits.max_pixels(), DEFAULT_MAX_PIXELS);
+        assert!(limits.check_frame_size(8192, 8192).is_ok());
+        let err = limits.check_frame_size(8192, 8193).unwrap_err();
         assert_eq!(
             err.about("a.png").to_string(),
             "max_pixels: a.png: frame size 8192x8193 (67117056 pixels) exceeds the limit of \
              67108864 pixels; raise the limit if the input really is that large"
         );
-        let err = check_frame_size(usize::MAX, usize::MAX).unwrap_err();
+        let err = limits.check_frame_size(usize::MAX, usize::MAX).unwrap_err();
         assert!(err.to_string().contains("(too many pixels)"), "{err}");
     }
 }

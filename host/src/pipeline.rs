@@ -29,10 +29,7 @@ use crate::engine::{Compute, Image, PairEngine};
 use crate::outputs::{DirWriter, OutputSpec, StreamFormat, y4m_frame_into, y4m_header};
 use crate::page_buffer::{ByteBuffer, PageBytes};
 use crate::sequence::{Frame, FrameSource};
-
-/// Set when the user asks the process to stop (Ctrl-C): no new pair is
-/// started, pairs in flight finish, and the run reports the interruption.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+use crate::stop::Stop;
 
 /// Where results go.
 pub enum Destination<'a> {
@@ -58,7 +55,7 @@ pub enum Destination<'a> {
 }
 
 /// How a sequence is run.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Options {
     /// Worker threads (at least 1).
     pub threads: usize,
@@ -71,6 +68,9 @@ pub struct Options {
     pub pair_names: bool,
     /// Keep the input index of every frame used ([`Summary::source_frames`]).
     pub record_frames: bool,
+    /// Set to stop the run: no new pair is started, pairs in flight
+    /// finish, and the run fails as interrupted.
+    pub stop: Stop,
 }
 
 /// One result as a sample: its files and what it came from.
@@ -279,13 +279,14 @@ fn process_with(
     let result = std::thread::scope(|scope| {
         let reader_tx = msg_tx.clone();
         let stop = &stop;
+        let reader_options = options.clone();
         scope.spawn(move || {
             let links = ReaderLinks {
                 jobs: job_tx,
                 tokens: token_rx,
                 msgs: reader_tx,
             };
-            read_pairs(source, options, links, stop, &buffers.frames, desk)
+            read_pairs(source, reader_options, links, stop, &buffers.frames, desk)
         });
         for _ in 0..threads {
             let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
@@ -311,6 +312,7 @@ fn process_with(
         let collector = Collector {
             tokens: Some(token_tx),
             stop,
+            interrupt: &options.stop,
             payloads: &buffers.payloads,
             dir,
             stream: stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
@@ -390,7 +392,7 @@ fn read_pairs(
         if stop.load(Ordering::SeqCst) {
             return;
         }
-        if INTERRUPTED.load(Ordering::SeqCst) {
+        if options.stop.is_stopped() {
             let _ = msgs.send(Msg::InputFailed(interrupted()));
             return;
         }
@@ -634,6 +636,8 @@ struct Collector<'a, 'w, 'o> {
     /// unblock it when the run stops.
     tokens: Option<SyncSender<()>>,
     stop: &'a AtomicBool,
+    /// The run's stop token ([`Options::stop`]).
+    interrupt: &'a Stop,
     payloads: &'a Pool<PageBytes>,
     dir: Option<&'a DirWriter>,
     stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
@@ -714,7 +718,7 @@ impl Collector<'_, '_, '_> {
         if let Some(e) = self.error.take().or(input_error) {
             return Err(e);
         }
-        if INTERRUPTED.load(Ordering::SeqCst) {
+        if self.interrupt.is_stopped() {
             return Err(interrupted());
         }
         if self.closed {
@@ -929,6 +933,7 @@ mod tests {
                 max_frames: None,
                 pair_names: false,
                 record_frames: false,
+                stop: Stop::new(),
             },
             &mut || calls += 1,
             overlap,

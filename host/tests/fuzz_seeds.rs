@@ -11,6 +11,7 @@ use std::path::Path;
 use image::codecs::jpeg::JpegEncoder;
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
+use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::outputs::{encode_npy_xy, flo};
 use reynoldsflow_host::{image_io, npy};
 
@@ -264,7 +265,7 @@ fn the_committed_seed_corpus_is_the_generated_one() {
         "gray.jpg",
         "rgb.jpg",
     ] {
-        image_io::decode_gray(&seeds[&format!("image/{name}")]).unwrap();
+        image_io::decode_gray(&seeds[&format!("image/{name}")], Limits::default()).unwrap();
     }
     flo::decode(&seeds["flo/3x2.flo"]).unwrap();
     for name in ["plane.npy", "fortran.npy", "big-endian.npy"] {

@@ -8,10 +8,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use reynoldsflow_core::IntensityScale;
 use reynoldsflow_host::engine::Compute;
+use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
 use reynoldsflow_host::pipeline::{self, Destination, Options};
 use reynoldsflow_host::sequence::y4m::Y4mSource;
 use reynoldsflow_host::settings::{EngineKind, ScaleArg};
+use reynoldsflow_host::stop::Stop;
 
 const W: usize = 160;
 const H: usize = 120;
@@ -80,7 +82,13 @@ fn large_allocations(
     let spec = OutputSpec::default();
     let mut out = std::io::sink();
     let before = LARGE.load(Ordering::SeqCst);
-    let mut source = Y4mSource::new("test.y4m".into(), Box::new(Cursor::new(input)), None).unwrap();
+    let mut source = Y4mSource::new(
+        "test.y4m".into(),
+        Box::new(Cursor::new(input)),
+        None,
+        Limits::default(),
+    )
+    .unwrap();
     let summary = pipeline::process(
         &mut source,
         &compute,
@@ -95,6 +103,7 @@ fn large_allocations(
             max_frames: None,
             pair_names: false,
             record_frames: false,
+            stop: Stop::new(),
         },
         &mut || {},
     )

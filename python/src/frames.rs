@@ -18,7 +18,7 @@ use numpy::{
 };
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use reynoldsflow_host::{Gray, HostError, limits};
+use reynoldsflow_host::{Gray, HostError};
 
 use crate::errors::{host_error, value_error};
 
@@ -118,7 +118,9 @@ impl<'py> Frames<'py> {
         // the readers and Stream apply it: before anything of that size is
         // allocated.
         let (h, w) = (shape[dims - 2], shape[dims - 1]);
-        limits::check_frame_size(w, h).map_err(|too_large| host_error(too_large.about(name)))?;
+        crate::frame_limits()
+            .check_frame_size(w, h)
+            .map_err(|too_large| host_error(too_large.about(name)))?;
         let array = array
             .cast::<PyArrayDyn<u8>>()?
             .try_readonly()

@@ -9,6 +9,7 @@
 //! while computing, and turns any panic into a `RuntimeError`.
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use numpy::ndarray::Axis;
 use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArray};
@@ -18,6 +19,7 @@ use pyo3::types::PyDict;
 
 use reynoldsflow_host::dataset::{self, Record, Shard};
 use reynoldsflow_host::engine::PairEngine;
+use reynoldsflow_host::limits::{DEFAULT_MAX_PIXELS, Limits};
 use reynoldsflow_host::outputs::flo;
 use reynoldsflow_host::pair_stream::{self, PairStream};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
@@ -299,7 +301,8 @@ fn represent_clip<'py>(
     }
     let (w, h) = plan.size.map_or((w, h), |size| size.of(w, h));
     // The frames taken, resized, are held too: the same limit.
-    reynoldsflow_host::limits::check_frame_size(w, h)
+    frame_limits()
+        .check_frame_size(w, h)
         .map_err(|too_large| host_error(too_large.about("resize")))?;
     let results = picked.len() - 1;
     let count = results + usize::from(keep_count);
@@ -359,7 +362,7 @@ fn sized(frame: Gray, plan: &FramePlan) -> Result<Gray, HostError> {
                 height: 0,
                 pixels: Vec::new(),
             };
-            sampled::resize_gray(&frame, size, &mut out)?;
+            sampled::resize_gray(&frame, size, frame_limits(), &mut out)?;
             Ok(out)
         }
         _ => Ok(frame),
@@ -520,7 +523,8 @@ impl Stream {
                 reynoldsflow_core::MAX_SIDE
             )));
         }
-        reynoldsflow_host::limits::check_frame_size(width, height)
+        frame_limits()
+            .check_frame_size(width, height)
             .map_err(|too_large| host_error(too_large.about("Stream")))?;
         Ok(Self {
             width,
@@ -800,7 +804,7 @@ fn read_frames(
     let max_frames = kw.max_frames()?;
     kw.done()?;
     let source = py
-        .detach(|| guarded(|| dataset::open_item(&path, path.is_dir(), &plan)))
+        .detach(|| guarded(|| dataset::open_item(&path, path.is_dir(), &plan, frame_limits())))
         .map_err(Failure::into_pyerr)?;
     Ok(FrameReader {
         source: Mutex::new(Some(source)),
@@ -922,6 +926,15 @@ fn write_flo(py: Python<'_>, path: std::path::PathBuf, flow: &Bound<'_, PyAny>) 
     .map_err(Failure::into_pyerr)
 }
 
+/// The frame-size limit of this process's Python users, as
+/// `set_max_pixels` sets it; each entry point passes it to the host.
+static MAX_PIXELS: AtomicU64 = AtomicU64::new(DEFAULT_MAX_PIXELS);
+
+/// The limits every entry point reads and checks frames within.
+pub(crate) fn frame_limits() -> Limits {
+    Limits::new(MAX_PIXELS.load(Ordering::Relaxed))
+}
+
 /// set_max_pixels(n)
 ///
 /// The most pixels (width x height) a frame of this process may have, at
@@ -938,7 +951,7 @@ fn set_max_pixels(n: i64) -> PyResult<()> {
             format!("{n} pixels; the limit is at least 1"),
         ))
     })?;
-    reynoldsflow_host::limits::set_max_pixels(n);
+    MAX_PIXELS.store(n, Ordering::Relaxed);
     Ok(())
 }
 
@@ -949,7 +962,8 @@ fn set_max_pixels(n: i64) -> PyResult<()> {
 /// (for the package's functions written in Python).
 #[pyfunction]
 fn _check_frame_size(width: usize, height: usize, subject: &str) -> PyResult<()> {
-    reynoldsflow_host::limits::check_frame_size(width, height)
+    frame_limits()
+        .check_frame_size(width, height)
         .map_err(|too_large| host_error(too_large.about(subject)))
 }
 
@@ -958,7 +972,7 @@ fn _check_frame_size(width: usize, height: usize, subject: &str) -> PyResult<()>
 /// The limit ``set_max_pixels`` sets.
 #[pyfunction]
 fn max_pixels() -> u64 {
-    reynoldsflow_host::limits::max_pixels()
+    frame_limits().max_pixels()
 }
 
 /// ReynoldsFlow: curl-free and divergence-free motion fields of frame

@@ -19,6 +19,7 @@ use reynoldsflow_host::sequence::sampled::{self, FramePlan, Rate};
 use reynoldsflow_host::settings::{
     self, EngineKind, FirstFrame, ScaleArg, Settings, TileSize, parse_choice,
 };
+use reynoldsflow_host::stop::Stop;
 
 use crate::errors::{host_error, value_error};
 
@@ -601,6 +602,8 @@ pub fn convert_settings(mut kw: Kwargs<'_>) -> PyResult<(ItemSettings, bool)> {
         keep_count,
         max_frames,
         plan,
+        limits: crate::frame_limits(),
+        stop: Stop::new(),
     };
     Ok((item, force))
 }

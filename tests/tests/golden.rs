@@ -14,6 +14,7 @@ use fixed::types::U16F16;
 use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::engine::{FixedOutput, compute_fixed};
 use reynoldsflow_host::image_io;
+use reynoldsflow_host::limits::Limits;
 use reynoldsflow_tests::{vector_cases, vectors_dir};
 
 /// The line that starts the record of the last blessing's changes.
@@ -116,7 +117,9 @@ fn field_changes(old: &[f64], new: &[f64], pixels: usize) -> String {
 /// What blessing `bytes` changes in the golden output `name` at `path`.
 fn change_note(path: &std::path::Path, name: &str, bytes: &[u8], pixels: usize) -> String {
     let old = match name.ends_with(".png") {
-        true => image_io::read_rgb8(path).map(|img| img.bytes).ok(),
+        true => image_io::read_rgb8(path, Limits::default())
+            .map(|img| img.bytes)
+            .ok(),
         false => std::fs::read(path).ok(),
     };
     let Some(old) = old else {
@@ -144,8 +147,8 @@ fn fixed_core_output_equals_the_golden_bytes() {
     let mut notes = format!("{CHANGES} (not checked; written by blessing)\n");
     for case in vector_cases() {
         let dir = vectors_dir().join(&case);
-        let f0 = image_io::read_gray(&dir.join("f0.pgm")).unwrap();
-        let f1 = image_io::read_gray(&dir.join("f1.pgm")).unwrap();
+        let f0 = image_io::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap();
+        let f1 = image_io::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap();
         let minmax =
             compute_fixed(&f0, &f1, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
         let fixed = compute_fixed(&f0, &f1, Params::DEFAULT, None, fixed).unwrap();
@@ -176,7 +179,7 @@ fn fixed_core_output_equals_the_golden_bytes() {
                 continue;
             }
             let golden = match is_png {
-                true => image_io::read_rgb8(&path)
+                true => image_io::read_rgb8(&path, Limits::default())
                     .map(|img| img.bytes)
                     .map_err(|e| e.to_string()),
                 false => std::fs::read(&path).map_err(|e| e.to_string()),

@@ -8,6 +8,7 @@ use std::hint::black_box;
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling};
 use reynoldsflow_host::engine::bytes::{self, Isa, Pass};
+use reynoldsflow_host::limits::Limits;
 /// Output columns of the strips of the compile-time engine the benches
 /// time (`Engine<COLS>`, arrays in a box, as a board would hold them);
 /// `reynoldsflow run` takes the host's wider strips
@@ -105,7 +106,8 @@ pub fn moving_pair(w: usize, h: usize) -> (Vec<u8>, Vec<u8>) {
 
 /// A gray image file (PGM, PNG, …) as `(width, height, pixels)`.
 pub fn read_gray(path: &str) -> (usize, usize, Vec<u8>) {
-    let gray = reynoldsflow_host::image_io::read_gray(std::path::Path::new(path))
-        .unwrap_or_else(|e| panic!("{path}: {e}"));
+    let gray =
+        reynoldsflow_host::image_io::read_gray(std::path::Path::new(path), Limits::default())
+            .unwrap_or_else(|e| panic!("{path}: {e}"));
     (gray.width, gray.height, gray.pixels)
 }

@@ -33,19 +33,20 @@
 use std::collections::HashMap;
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use serde_json::json;
 
 use crate::HostError;
 use crate::engine::Compute;
+use crate::limits::Limits;
 use crate::outputs::{DirWriter, ImageFormat, OutputSpec};
 use crate::pipeline::{self, Destination, Options, Summary};
 use crate::sequence::folder::{FolderSource, is_frame_file};
 use crate::sequence::sampled::FramePlan;
 use crate::sequence::{self, FrameSource, InputSpec, input_error};
 use crate::settings::{Setting, Settings};
+use crate::stop::Stop;
 
 pub mod commit;
 pub mod shard;
@@ -67,6 +68,10 @@ pub struct ItemSettings {
     pub max_frames: Option<u64>,
     /// Which frames make pairs, at what size.
     pub plan: FramePlan,
+    /// What each item's frames may be.
+    pub limits: Limits,
+    /// Set to stop: the item in work ends [`Outcome::Interrupted`].
+    pub stop: Stop,
 }
 
 impl ItemSettings {
@@ -78,6 +83,7 @@ impl ItemSettings {
             max_frames: self.max_frames.map(|n| n as usize),
             pair_names: self.plan.picks(),
             record_frames: false,
+            stop: self.stop.clone(),
         }
     }
 
@@ -387,21 +393,25 @@ pub enum Outcome {
 }
 
 /// An item's frames, as `dataset` reads them (a frame folder, or a video),
-/// through `plan`.
+/// through `plan`, within `limits`.
 pub fn open_item(
     src: &Path,
     frames: bool,
     plan: &FramePlan,
+    limits: Limits,
 ) -> Result<Box<dyn FrameSource>, HostError> {
     let source: Box<dyn FrameSource> = if frames {
-        Box::new(FolderSource::dir(src)?)
+        Box::new(FolderSource::dir(src, limits)?)
     } else {
-        sequence::open(&InputSpec::Path {
-            path: src.to_owned(),
-            raw: None,
-        })?
+        sequence::open(
+            &InputSpec::Path {
+                path: src.to_owned(),
+                raw: None,
+            },
+            limits,
+        )?
     };
-    plan.wrap(source, &src.display().to_string())
+    plan.wrap(source, &src.display().to_string(), limits)
 }
 
 /// What every item is made with: checked once, shared by the workers.
@@ -414,6 +424,8 @@ pub struct ItemRunner {
     pub options: Options,
     /// Which frames make pairs, at what size.
     pub plan: FramePlan,
+    /// What each item's frames may be.
+    pub limits: Limits,
     fingerprint: String,
     /// The settings as WebDataset samples record them.
     pub settings: serde_json::Value,
@@ -457,6 +469,7 @@ impl ItemRunner {
             spec,
             options,
             plan,
+            limits: item.limits,
             fingerprint,
             settings,
             force,
@@ -485,7 +498,7 @@ impl ItemRunner {
                 return Ok(None);
             }
             // The new settings meet the source before anything is removed.
-            let mut source = open_item(&item.src, item.frames, &self.plan)?;
+            let mut source = open_item(&item.src, item.frames, &self.plan, self.limits)?;
             if out.is_dir() {
                 commit::remove_staging(out)?;
                 // Temp files of single writes an earlier run was killed in.
@@ -502,7 +515,7 @@ impl ItemRunner {
                     &mut *source,
                     &self.compute,
                     Destination::Dir(&dir),
-                    self.options,
+                    self.options.clone(),
                     on_output,
                 )?;
                 dir.flush()?;
@@ -547,7 +560,7 @@ impl ItemRunner {
         match result {
             Ok(Some(summary)) => Outcome::Done(summary),
             Ok(None) => Outcome::Skipped,
-            Err(_) if pipeline::INTERRUPTED.load(Ordering::SeqCst) => Outcome::Interrupted,
+            Err(_) if self.options.stop.is_stopped() => Outcome::Interrupted,
             Err(e) => Outcome::Failed(e.to_string()),
         }
     }

@@ -2,11 +2,8 @@
 //! takes. An item belongs to shard `fnv1a64(relative path) mod N`, so the
 //! share depends on the item alone: adding files never moves finished work
 //! between shards, and any process can tell its items without talking to
-//! the others. Without `--shard`, a Slurm job array's or a Kubernetes
-//! Indexed Job's variables give the shard.
-
-use crate::HostError;
-use crate::settings::Setting;
+//! the others. (The CLI's `dataset` also reads the shard from a Slurm job
+//! array's or a Kubernetes Indexed Job's variables.)
 
 /// Shard `index` of `count` (`index < count`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,75 +55,6 @@ impl Shard {
     pub fn contains(&self, key: &str) -> bool {
         fnv1a64(key.as_bytes()) % self.count == self.index
     }
-
-    /// The shard a scheduler assigned to this process, read with `var`
-    /// (the environment): a Slurm job array (`SLURM_ARRAY_TASK_ID` minus
-    /// `SLURM_ARRAY_TASK_MIN`, of `SLURM_ARRAY_TASK_COUNT`; the array must
-    /// be contiguous, e.g. `--array=0-7`), or a Kubernetes Indexed Job
-    /// (`JOB_COMPLETION_INDEX`, of `count`: Kubernetes does not tell a pod
-    /// how many completions its Job has). `None` outside both; the text
-    /// says where the shard came from.
-    pub fn from_scheduler(
-        var: impl Fn(&str) -> Option<String>,
-        count: Option<u64>,
-    ) -> Result<Option<(Shard, String)>, HostError> {
-        let number = |name: &str| -> Result<Option<u64>, HostError> {
-            var(name)
-                .map(|v| {
-                    v.trim().parse::<u64>().map_err(|_| {
-                        HostError::invalid(name, format!("'{v}' is not a non-negative integer"))
-                    })
-                })
-                .transpose()
-        };
-        let checked = |index: u64, count: u64, from: String| {
-            Shard::new(index, count)
-                .map(|s| Some((s, from)))
-                .map_err(|e| HostError::setting(Setting::Shard, e))
-        };
-        if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
-            let min = number("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
-            let Some(n) = count.or(number("SLURM_ARRAY_TASK_COUNT")?) else {
-                return Err(HostError::invalid(
-                    "--shard",
-                    "SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not; pass --shards N",
-                ));
-            };
-            let index = id.checked_sub(min).ok_or_else(|| {
-                HostError::invalid(
-                    "SLURM_ARRAY_TASK_ID",
-                    format!("{id} is below SLURM_ARRAY_TASK_MIN {min}"),
-                )
-            })?;
-            return checked(
-                index,
-                n,
-                format!("Slurm array task {id} (first {min}) of {n}"),
-            );
-        }
-        if let Some(index) = number("JOB_COMPLETION_INDEX")? {
-            let Some(n) = count else {
-                return Err(HostError::invalid(
-                    "--shards",
-                    "JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job) but the shard count is unknown; \
-                     pass --shards N with the Job's completions, or --shard I/N",
-                ));
-            };
-            return checked(
-                index,
-                n,
-                format!("Kubernetes completion index {index} of {n}"),
-            );
-        }
-        match count {
-            Some(_) => Err(HostError::invalid(
-                "--shards",
-                "gives the count only; the index comes from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX, \
-                 and neither is set (use --shard I/N)",
-            )),
-            None => Ok(None),
-        }
-    }
 }
 
 #[cfg(test)]
@@ -161,36 +89,5 @@ mod tests {
         // The hash is the published FNV-1a: stable across builds and platforms.
         assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
         assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
-    }
-
-    fn env<'a>(vars: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {
-        move |name| {
-            vars.iter()
-                .find(|(k, _)| *k == name)
-                .map(|(_, v)| v.to_string())
-        }
-    }
-
-    #[test]
-    fn reads_slurm_and_kubernetes_variables() {
-        let slurm = [
-            ("SLURM_ARRAY_TASK_ID", "5"),
-            ("SLURM_ARRAY_TASK_MIN", "1"),
-            ("SLURM_ARRAY_TASK_COUNT", "8"),
-        ];
-        let (shard, from) = Shard::from_scheduler(env(&slurm), None).unwrap().unwrap();
-        assert_eq!(shard, Shard { index: 4, count: 8 });
-        assert!(from.contains("Slurm"), "{from}");
-        let k8s = [("JOB_COMPLETION_INDEX", "2")];
-        let (shard, _) = Shard::from_scheduler(env(&k8s), Some(3)).unwrap().unwrap();
-        assert_eq!(shard, Shard { index: 2, count: 3 });
-        let err = Shard::from_scheduler(env(&k8s), None)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("--shards N"), "{err}");
-        assert!(Shard::from_scheduler(env(&k8s), Some(2)).is_err());
-        assert!(Shard::from_scheduler(env(&[]), None).unwrap().is_none());
-        assert!(Shard::from_scheduler(env(&[]), Some(2)).is_err());
-        assert!(Shard::from_scheduler(env(&[("SLURM_ARRAY_TASK_ID", "x")]), None).is_err());
     }
 }

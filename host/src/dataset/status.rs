@@ -5,7 +5,7 @@
 
 use std::fs::{File, OpenOptions};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use serde_json::json;
@@ -86,7 +86,8 @@ impl Record {
 /// whole line per `write` call so processes sharing the file (shards of
 /// one dataset) never interleave within a line.
 pub struct StatusLog {
-    file: Option<Mutex<File>>,
+    /// The file and its path, for errors.
+    file: Option<(Mutex<File>, PathBuf)>,
 }
 
 impl StatusLog {
@@ -95,12 +96,15 @@ impl StatusLog {
         let file = match path {
             None => None,
             Some(p) if p.as_os_str() == "-" => None,
-            Some(p) => Some(Mutex::new(
-                OpenOptions::new()
-                    .create(true)
-                    .append(true)
-                    .open(p)
-                    .map_err(|e| HostError::io(p, e))?,
+            Some(p) => Some((
+                Mutex::new(
+                    OpenOptions::new()
+                        .create(true)
+                        .append(true)
+                        .open(p)
+                        .map_err(|e| HostError::io(p, e))?,
+                ),
+                p.to_owned(),
             )),
         };
         Ok(Self { file })
@@ -110,11 +114,11 @@ impl StatusLog {
     pub fn write(&self, record: &Record) -> Result<(), HostError> {
         let line = format!("{}\n", record.json());
         match &self.file {
-            Some(f) => f
+            Some((f, path)) => f
                 .lock()
                 .expect("no panics holding it")
                 .write_all(line.as_bytes())
-                .map_err(|e| HostError::io("--status", e)),
+                .map_err(|e| HostError::io(path, e)),
             // A closed stdout (e.g. `| head`) must not fail the dataset.
             None => {
                 let _ = std::io::stdout().lock().write_all(line.as_bytes());

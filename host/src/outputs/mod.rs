@@ -39,7 +39,6 @@ mod background;
 #[cfg(feature = "crash-injection")]
 pub mod crash_injection;
 pub mod flo;
-pub mod shards;
 
 pub use crate::engine::PairFields;
 pub use crate::settings::Variant;
@@ -120,7 +119,7 @@ pub enum ImageFormatName {
 
 choices!(ImageFormatName {
     Png => "png", "Lossless PNG (the default)";
-    Jpg => "jpg", "Lossy JPEG (--jpeg-quality)";
+    Jpg => "jpg", "Lossy JPEG, at the JPEG quality set";
 });
 
 /// The JPEG quality when `--jpeg-quality` is not given.

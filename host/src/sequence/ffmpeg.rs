@@ -16,6 +16,7 @@ use std::thread::JoinHandle;
 use super::y4m::Y4mSource;
 use super::{Frame, FrameSource, input_error};
 use crate::HostError;
+use crate::limits::Limits;
 
 /// The environment variable that names the ffmpeg program.
 pub const FFMPEG_ENV: &str = "REYNOLDSFLOW_FFMPEG";
@@ -40,8 +41,9 @@ pub struct FfmpegSource {
 }
 
 impl FfmpegSource {
-    /// Start ffmpeg on `path` and read the stream header.
-    pub fn spawn(path: &Path) -> Result<Self, HostError> {
+    /// Start ffmpeg on `path` and read the stream header, its frame size
+    /// within `limits`.
+    pub fn spawn(path: &Path, limits: Limits) -> Result<Self, HostError> {
         let program = program();
         // `file:` keeps names with a colon or a leading dash from being read as
         // protocols or options.
@@ -106,7 +108,12 @@ impl FfmpegSource {
             y4m: None,
             finished: false,
         };
-        match Y4mSource::new(path.to_owned(), Box::new(BufReader::new(stdout)), None) {
+        match Y4mSource::new(
+            path.to_owned(),
+            Box::new(BufReader::new(stdout)),
+            None,
+            limits,
+        ) {
             Ok(y4m) => source.y4m = Some(y4m),
             Err(e) => return Err(source.finish().err().unwrap_or(e)),
         }

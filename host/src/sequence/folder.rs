@@ -7,6 +7,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::{Frame, FrameSource, input_error, natural};
+use crate::limits::Limits;
 use crate::{HostError, image_io};
 
 /// File extensions read as frames (compared case-insensitively).
@@ -83,11 +84,13 @@ pub struct FolderSource {
     next: usize,
     /// File and size of the last frame read, for the size check.
     last: Option<(PathBuf, (usize, usize))>,
+    /// What each frame file's header may state.
+    limits: Limits,
 }
 
 impl FolderSource {
-    /// Every frame file directly inside `dir`.
-    pub fn dir(dir: &Path) -> Result<Self, HostError> {
+    /// Every frame file directly inside `dir`, each decoded within `limits`.
+    pub fn dir(dir: &Path, limits: Limits) -> Result<Self, HostError> {
         let files = list(dir, |name| is_frame_file(Path::new(name)))?;
         if files.is_empty() {
             return Err(input_error(
@@ -98,12 +101,13 @@ impl FolderSource {
                 ),
             ));
         }
-        Self::from_files(files)
+        Self::from_files(files, limits)
     }
 
     /// The frame files matching a pattern whose last component has
-    /// wildcards (`frames/*.png`, `seq/img_??.jpg`).
-    pub fn glob(pattern: &Path) -> Result<Self, HostError> {
+    /// wildcards (`frames/*.png`, `seq/img_??.jpg`), each decoded within
+    /// `limits`.
+    pub fn glob(pattern: &Path, limits: Limits) -> Result<Self, HostError> {
         let name = pattern.file_name().and_then(|n| n.to_str()).unwrap_or("");
         let dir = match pattern.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
@@ -127,11 +131,12 @@ impl FolderSource {
         if files.is_empty() {
             return Err(input_error(pattern, "the pattern matches no frame files"));
         }
-        Self::from_files(files)
+        Self::from_files(files, limits)
     }
 
-    /// An explicit list of frame files, in the order given.
-    pub fn from_files(files: Vec<PathBuf>) -> Result<Self, HostError> {
+    /// An explicit list of frame files, in the order given, each decoded
+    /// within `limits`.
+    pub fn from_files(files: Vec<PathBuf>, limits: Limits) -> Result<Self, HostError> {
         // Two files with one stem would write the same outputs.
         let mut stems: Vec<(&str, &PathBuf)> = files.iter().map(|f| (stem_of(f), f)).collect();
         stems.sort();
@@ -149,6 +154,7 @@ impl FolderSource {
             files,
             next: 0,
             last: None,
+            limits,
         })
     }
 
@@ -163,7 +169,7 @@ fn stem_of(path: &Path) -> &str {
 }
 
 /// Files directly in `dir` whose UTF-8 names pass `keep`, in natural order.
-pub(crate) fn list(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>, HostError> {
+pub fn list(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>, HostError> {
     let mut names = Vec::new();
     for entry in fs::read_dir(dir).map_err(|e| HostError::io(dir, e))? {
         let entry = entry.map_err(|e| HostError::io(dir, e))?;
@@ -199,7 +205,7 @@ impl FrameSource for FolderSource {
         let Some(path) = self.files.get(self.next) else {
             return Ok(None);
         };
-        let gray = image_io::read_gray(path)?;
+        let gray = image_io::read_gray(path, self.limits)?;
         if let Some((last_path, size)) = &self.last
             && gray.size() != *size
         {

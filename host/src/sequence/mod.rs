@@ -18,6 +18,8 @@ use std::fs::File;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
+use crate::limits::Limits;
+use crate::settings::Setting;
 use crate::{Gray, HostError};
 
 pub mod ffmpeg;
@@ -202,8 +204,8 @@ fn has_wildcard(s: &str) -> bool {
 /// Open `spec` as a frame source. Files are told apart by their first
 /// bytes (`YUV4MPEG2` is Y4M, an image signature is a single image and
 /// refused, anything else goes to ffmpeg); folders and glob patterns are
-/// frame folders.
-pub fn open(spec: &InputSpec) -> Result<Box<dyn FrameSource>, HostError> {
+/// frame folders. No frame over `limits` is read.
+pub fn open(spec: &InputSpec, limits: Limits) -> Result<Box<dyn FrameSource>, HostError> {
     match spec {
         InputSpec::Demo => Ok(Box::new(synthetic::Demo::new())),
         InputSpec::Stdin { raw: Some((w, h)) } => Ok(Box::new(raw::RawSource::new(
@@ -211,23 +213,31 @@ pub fn open(spec: &InputSpec) -> Result<Box<dyn FrameSource>, HostError> {
             Box::new(io::stdin()),
             *w,
             *h,
+            limits,
         )?)),
         InputSpec::Stdin { raw: None } => {
             let name = PathBuf::from("stdin");
             let mut stdin = io::BufReader::new(io::stdin());
             let head = peek(&mut stdin, &name)?;
             if head.starts_with(y4m::MAGIC) {
-                return Ok(Box::new(y4m::Y4mSource::new(name, Box::new(stdin), None)?));
+                return Ok(Box::new(y4m::Y4mSource::new(
+                    name,
+                    Box::new(stdin),
+                    None,
+                    limits,
+                )?));
             }
             let what = if head.is_empty() {
                 "is empty"
             } else {
                 "is not a Y4M stream"
             };
-            Err(input_error(
-                name,
+            // Raw frames are read only with their size set.
+            Err(HostError::setting(
+                Setting::Raw,
                 format!(
-                    "{what}; give raw 8-bit gray frames with --raw WxH, or pipe Y4M (e.g. ffmpeg -i clip.mp4 -f yuv4mpegpipe -pix_fmt gray -)"
+                    "{} {what}; give the size WxH of raw 8-bit gray frames, or pipe Y4M (e.g. ffmpeg -i clip.mp4 -f yuv4mpegpipe -pix_fmt gray -)",
+                    name.display()
                 ),
             ))
         }
@@ -237,23 +247,28 @@ pub fn open(spec: &InputSpec) -> Result<Box<dyn FrameSource>, HostError> {
         } => {
             let file = File::open(path).map_err(|e| HostError::io(path, e))?;
             let len = file.metadata().ok().map(|m| m.len());
-            let mut source =
-                raw::RawSource::new(path.clone(), Box::new(io::BufReader::new(file)), *w, *h)?;
+            let mut source = raw::RawSource::new(
+                path.clone(),
+                Box::new(io::BufReader::new(file)),
+                *w,
+                *h,
+                limits,
+            )?;
             source.set_total_bytes(len);
             Ok(Box::new(source))
         }
-        InputSpec::Path { path, raw: None } => open_path(path),
+        InputSpec::Path { path, raw: None } => open_path(path, limits),
     }
 }
 
-fn open_path(path: &Path) -> Result<Box<dyn FrameSource>, HostError> {
+fn open_path(path: &Path, limits: Limits) -> Result<Box<dyn FrameSource>, HostError> {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
     if !path.exists() && has_wildcard(name) {
-        return Ok(Box::new(folder::FolderSource::glob(path)?));
+        return Ok(Box::new(folder::FolderSource::glob(path, limits)?));
     }
     let meta = std::fs::metadata(path).map_err(|e| HostError::io(path, e))?;
     if meta.is_dir() {
-        return Ok(Box::new(folder::FolderSource::dir(path)?));
+        return Ok(Box::new(folder::FolderSource::dir(path, limits)?));
     }
     let file = File::open(path).map_err(|e| HostError::io(path, e))?;
     let mut reader = io::BufReader::new(file);
@@ -263,6 +278,7 @@ fn open_path(path: &Path) -> Result<Box<dyn FrameSource>, HostError> {
             path.to_owned(),
             Box::new(reader),
             Some(meta.len()),
+            limits,
         )?));
     }
     if head.is_empty() {
@@ -275,7 +291,7 @@ fn open_path(path: &Path) -> Result<Box<dyn FrameSource>, HostError> {
         ));
     }
     drop(reader);
-    Ok(Box::new(ffmpeg::FfmpegSource::spawn(path)?))
+    Ok(Box::new(ffmpeg::FfmpegSource::spawn(path, limits)?))
 }
 
 /// PNG, JPEG or PNM by signature.
@@ -287,7 +303,7 @@ fn is_image(head: &[u8]) -> bool {
 }
 
 /// The first bytes of a buffered reader, without consuming them.
-pub(crate) fn peek<R: io::BufRead>(reader: &mut R, name: &Path) -> Result<Vec<u8>, HostError> {
+pub fn peek<R: io::BufRead>(reader: &mut R, name: &Path) -> Result<Vec<u8>, HostError> {
     loop {
         match reader.fill_buf() {
             Ok(buf) => return Ok(buf[..buf.len().min(16)].to_vec()),
@@ -298,7 +314,7 @@ pub(crate) fn peek<R: io::BufRead>(reader: &mut R, name: &Path) -> Result<Vec<u8
 }
 
 /// Read until `buf` is full or the input ends; the number of bytes read.
-pub(crate) fn read_full(reader: &mut dyn Read, buf: &mut [u8]) -> io::Result<usize> {
+pub fn read_full(reader: &mut dyn Read, buf: &mut [u8]) -> io::Result<usize> {
     let mut filled = 0;
     while filled < buf.len() {
         match reader.read(&mut buf[filled..]) {

@@ -6,8 +6,9 @@ use std::io::Read;
 use std::path::PathBuf;
 
 use super::{Frame, FrameSource, index_stem, input_error, read_full};
+use crate::limits::Limits;
 use crate::settings::Setting;
-use crate::{Gray, HostError, limits};
+use crate::{Gray, HostError};
 
 /// Raw frames read from any reader.
 pub struct RawSource {
@@ -23,12 +24,14 @@ pub struct RawSource {
 }
 
 impl RawSource {
-    /// Frames of `width × height` from `reader`, reported as `name`.
+    /// Frames of `width × height` from `reader`, reported as `name`; a
+    /// size over `limits` is refused.
     pub fn new(
         name: PathBuf,
         reader: Box<dyn Read + Send>,
         width: usize,
         height: usize,
+        limits: Limits,
     ) -> Result<Self, HostError> {
         if width == 0 || height == 0 {
             return Err(HostError::setting(
@@ -36,7 +39,9 @@ impl RawSource {
                 format!("{width}x{height} is not a usable frame size"),
             ));
         }
-        limits::check_frame_size(width, height).map_err(|e| e.about(name.display()))?;
+        limits
+            .check_frame_size(width, height)
+            .map_err(|e| e.about(name.display()))?;
         Ok(Self {
             name,
             reader,
@@ -83,11 +88,15 @@ impl FrameSource for RawSource {
         }
         if got < size {
             self.done = true;
-            return Err(input_error(
-                &self.name,
+            // The input, or the frame size it was read with, is wrong.
+            return Err(HostError::setting(
+                Setting::Raw,
                 format!(
-                    "truncated: the input ends {got} bytes into frame {} (a {}x{} frame is {size} bytes; is --raw right?)",
-                    self.index, self.width, self.height
+                    "{}: truncated: the input ends {got} bytes into frame {} (a {}x{} frame is {size} bytes; is that frame size right?)",
+                    self.name.display(),
+                    self.index,
+                    self.width,
+                    self.height
                 ),
             ));
         }
@@ -112,8 +121,14 @@ mod tests {
     #[test]
     fn whole_frames_then_a_clear_truncation() {
         let bytes: Vec<u8> = (0..14).collect();
-        let mut src =
-            RawSource::new("stdin".into(), Box::new(std::io::Cursor::new(bytes)), 3, 2).unwrap();
+        let mut src = RawSource::new(
+            "stdin".into(),
+            Box::new(std::io::Cursor::new(bytes)),
+            3,
+            2,
+            Limits::default(),
+        )
+        .unwrap();
         assert_eq!(
             src.next_frame().unwrap().unwrap().gray.pixels,
             [0, 1, 2, 3, 4, 5]
@@ -121,7 +136,7 @@ mod tests {
         assert_eq!(src.next_frame().unwrap().unwrap().stem, "000001");
         let err = src.next_frame().unwrap_err().to_string();
         assert!(
-            err.starts_with("stdin: truncated: the input ends 2 bytes into frame 2"),
+            err.starts_with("raw: stdin: truncated: the input ends 2 bytes into frame 2"),
             "{err}"
         );
         assert!(src.next_frame().unwrap().is_none());

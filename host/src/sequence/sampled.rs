@@ -11,8 +11,9 @@
 use reynoldsflow_cues::resample::{MAX_SIDE, Resize};
 
 use super::{Frame, FrameSource};
+use crate::limits::Limits;
 use crate::settings::Setting;
-use crate::{Gray, HostError, limits};
+use crate::{Gray, HostError};
 
 /// A frame rate in frames per second, as an exact ratio `num / den`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -201,16 +202,18 @@ impl FramePlan {
     }
 
     /// `source` with this plan applied (itself for the identity); `name`
-    /// is the input's, for errors.
+    /// is the input's, for errors. No frame is resized to more than
+    /// `limits` allow.
     pub fn wrap(
         &self,
         source: Box<dyn FrameSource>,
         name: &str,
+        limits: Limits,
     ) -> Result<Box<dyn FrameSource>, HostError> {
         if self.is_identity() {
             return Ok(source);
         }
-        Ok(Box::new(Sampled::new(source, self, name)?))
+        Ok(Box::new(Sampled::new(source, self, name, limits)?))
     }
 }
 
@@ -305,10 +308,17 @@ fn gcd(mut a: u128, mut b: u128) -> u128 {
 
 /// A frame resized to `size`, by the resampler of docs/resample.md, into
 /// `out` (reusing its memory); `frame` itself when the size is its own.
-pub fn resize_gray(frame: &Gray, size: FrameSize, out: &mut Gray) -> Result<(), HostError> {
+/// A size over `limits` is refused.
+pub fn resize_gray(
+    frame: &Gray,
+    size: FrameSize,
+    limits: Limits,
+    out: &mut Gray,
+) -> Result<(), HostError> {
     let (w, h) = size.of(frame.width, frame.height);
     // The size asked for, not an input's: the resize is at fault.
-    limits::check_frame_size(w, h)
+    limits
+        .check_frame_size(w, h)
         .map_err(|e| HostError::setting(Setting::Resize, e.to_string()))?;
     let resize = Resize::new(frame.width, frame.height, w, h)
         .map_err(|e| HostError::setting(Setting::Resize, e.to_string()))?;
@@ -327,16 +337,20 @@ pub struct Sampled {
     size: Option<FrameSize>,
     /// Frames read from `inner` so far.
     read: usize,
+    /// What a resized frame may be.
+    limits: Limits,
     /// The resized frame's buffer, swapped with the frame read.
     spare: Gray,
 }
 
 impl Sampled {
-    /// `inner` through `plan`; `name` is the input's, for errors.
+    /// `inner` through `plan`, resized within `limits`; `name` is the
+    /// input's, for errors.
     pub fn new(
         inner: Box<dyn FrameSource>,
         plan: &FramePlan,
         name: &str,
+        limits: Limits,
     ) -> Result<Self, HostError> {
         let picker = plan.picker(inner.frame_rate(), name)?;
         Ok(Self {
@@ -344,6 +358,7 @@ impl Sampled {
             picker,
             size: plan.size,
             read: 0,
+            limits,
             spare: Gray {
                 width: 0,
                 height: 0,
@@ -374,7 +389,7 @@ impl FrameSource for Sampled {
         if let Some(size) = self.size
             && size.of(frame.gray.width, frame.gray.height) != frame.gray.size()
         {
-            resize_gray(&frame.gray, size, &mut self.spare)?;
+            resize_gray(&frame.gray, size, self.limits, &mut self.spare)?;
             std::mem::swap(&mut frame.gray, &mut self.spare);
         }
         Ok(true)

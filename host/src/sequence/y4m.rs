@@ -9,7 +9,8 @@ use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 
 use super::{Frame, FrameSource, input_error, read_full, write_index_stem};
-use crate::{HostError, limits};
+use crate::HostError;
+use crate::limits::{self, Limits};
 
 /// The first bytes of every Y4M stream.
 pub const MAGIC: &[u8] = b"YUV4MPEG2";
@@ -82,8 +83,9 @@ impl From<String> for HeaderError {
     }
 }
 
-/// Parse the header line (without its newline).
-pub fn parse_header(line: &[u8]) -> Result<Header, HeaderError> {
+/// Parse the header line (without its newline); a frame size over
+/// `limits` is refused.
+pub fn parse_header(line: &[u8], limits: Limits) -> Result<Header, HeaderError> {
     let text = std::str::from_utf8(line).map_err(|_| "the Y4M header is not text".to_owned())?;
     let mut tokens = text.split(' ').filter(|t| !t.is_empty());
     if tokens.next() != Some("YUV4MPEG2") {
@@ -114,7 +116,9 @@ pub fn parse_header(line: &[u8]) -> Result<Header, HeaderError> {
             .to_owned()
             .into());
     };
-    limits::check_frame_size(width, height).map_err(HeaderError::TooLarge)?;
+    limits
+        .check_frame_size(width, height)
+        .map_err(HeaderError::TooLarge)?;
     let extra_bytes = match extra_bytes(&chroma, width, height) {
         Some(n) => n,
         None => {
@@ -140,7 +144,7 @@ pub fn parse_header(line: &[u8]) -> Result<Header, HeaderError> {
 /// Read one `\n`-terminated line (without the newline). `Ok(None)` at a
 /// clean end of input; an error if the input ends inside the line or the
 /// line is longer than [`MAX_LINE`].
-pub(crate) fn read_line(reader: &mut dyn BufRead) -> Result<Option<Vec<u8>>, String> {
+pub fn read_line(reader: &mut dyn BufRead) -> Result<Option<Vec<u8>>, String> {
     let mut line = Vec::new();
     let n = reader
         .take(MAX_LINE as u64 + 1)
@@ -175,19 +179,20 @@ pub struct Y4mSource {
 }
 
 impl Y4mSource {
-    /// Read the header of `reader` (reported as `name`); `file_len`, when
-    /// known, gives the frame count hint.
+    /// Read the header of `reader` (reported as `name`), its frame size
+    /// within `limits`; `file_len`, when known, gives the frame count hint.
     pub fn new(
         name: PathBuf,
         mut reader: Box<dyn BufRead + Send>,
         file_len: Option<u64>,
+        limits: Limits,
     ) -> Result<Self, HostError> {
         let line = match read_line(&mut *reader) {
             Ok(Some(line)) => line,
             Ok(None) => return Err(input_error(name, "empty input; expected a Y4M header")),
             Err(e) => return Err(input_error(name, e)),
         };
-        let header = parse_header(&line).map_err(|e| e.about(&name))?;
+        let header = parse_header(&line, limits).map_err(|e| e.about(&name))?;
         // With bare FRAME lines, each frame takes 6 + Y + extra bytes.
         let per_frame = 6 + header.width * header.height + header.extra_bytes;
         let count_hint = file_len.map(|len| {
@@ -311,16 +316,25 @@ mod tests {
     /// character split inside it and panicked.
     #[test]
     fn a_non_ascii_tag_is_ignored_not_a_panic() {
-        let header = parse_header("YUV4MPEG2 W3 H2 Cmono \u{152}noo".as_bytes()).unwrap();
+        let header = parse_header(
+            "YUV4MPEG2 W3 H2 Cmono \u{152}noo".as_bytes(),
+            Limits::default(),
+        )
+        .unwrap();
         assert_eq!((header.width, header.height), (3, 2));
         let crash: &[u8] = b"YUV4MPEG2 H\0\0\x003 F30000:1 Ip A1:1 Cmono XF3 300YUV4MPEG2 W3 \xc5\x92noo XYSCSS=420J;PEG";
-        assert!(parse_header(crash).is_err());
+        assert!(parse_header(crash, Limits::default()).is_err());
     }
 
     use super::*;
 
     fn source(bytes: Vec<u8>) -> Result<Y4mSource, HostError> {
-        Y4mSource::new("t.y4m".into(), Box::new(std::io::Cursor::new(bytes)), None)
+        Y4mSource::new(
+            "t.y4m".into(),
+            Box::new(std::io::Cursor::new(bytes)),
+            None,
+            Limits::default(),
+        )
     }
 
     fn stream(header: &str, frames: &[&[u8]]) -> Vec<u8> {

@@ -6,9 +6,10 @@
 
 use std::io::{self, Write};
 
-use crate::HostError;
+use reynoldsflow_host::HostError;
+use reynoldsflow_host::outputs::y4m_frame;
+
 use crate::captured::{Captured, Layout};
-use crate::outputs::y4m_frame;
 
 /// One differing byte: where, and both values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

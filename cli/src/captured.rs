@@ -17,9 +17,10 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
-use crate::sequence::{folder, input_error, peek, read_full, y4m};
-use crate::settings::choices;
-use crate::{HostError, image_io};
+use reynoldsflow_host::limits::Limits;
+use reynoldsflow_host::sequence::{folder, input_error, peek, read_full, y4m};
+use reynoldsflow_host::settings::Choice;
+use reynoldsflow_host::{HostError, image_io};
 
 /// The format of a capture (`--captured-format`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,11 +33,25 @@ pub enum CapturedFormat {
     PngDir,
 }
 
-choices!(CapturedFormat {
-    Rgb24 => "rgb24", "Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24)";
-    Y4m => "y4m", "YUV4MPEG2 C444 (run --out - --format y4m), compared in YCbCr";
-    PngDir => "png-dir", "A folder of RGB8 PNGs in natural order of their names (run --out DIR)";
-});
+impl Choice for CapturedFormat {
+    const ALL: &'static [Self] = &[Self::Rgb24, Self::Y4m, Self::PngDir];
+    fn name(self) -> &'static str {
+        match self {
+            Self::Rgb24 => "rgb24",
+            Self::Y4m => "y4m",
+            Self::PngDir => "png-dir",
+        }
+    }
+    fn help(self) -> &'static str {
+        match self {
+            Self::Rgb24 => {
+                "Raw RGB8 frames back to back, 3*W*H bytes each (run --out - --format rgb24)"
+            }
+            Self::Y4m => "YUV4MPEG2 C444 (run --out - --format y4m), compared in YCbCr",
+            Self::PngDir => "A folder of RGB8 PNGs in natural order of their names (run --out DIR)",
+        }
+    }
+}
 
 impl CapturedFormat {
     /// The format a path implies: a folder is `png-dir`, a `.y4m` file
@@ -111,17 +126,20 @@ pub struct Captured {
     frames: Frames,
     /// Frames read so far.
     read: usize,
+    /// What a frame file's or the stream's header may state.
+    limits: Limits,
 }
 
 impl Captured {
     /// Open `path` (`-`: standard input) as frames of `width × height`,
     /// in `format`, or the format the path implies. Fails, naming the
     /// capture, when it cannot be read in that format or holds frames of
-    /// another size.
+    /// another size; no header over `limits` is believed.
     pub fn open(
         path: &Path,
         format: Option<CapturedFormat>,
         (width, height): (usize, usize),
+        limits: Limits,
     ) -> Result<Self, HostError> {
         let stdin = path.as_os_str() == "-";
         let name = if stdin {
@@ -139,7 +157,7 @@ impl Captured {
             Box::new(BufReader::new(io::stdin()))
         } else {
             if format == Some(CapturedFormat::PngDir) || path.is_dir() {
-                return Self::open_dir(path, format, (width, height));
+                return Self::open_dir(path, format, (width, height), limits);
             }
             let file = File::open(path).map_err(|e| HostError::io(path, e))?;
             Box::new(BufReader::new(file))
@@ -155,7 +173,7 @@ impl Captured {
         };
         let y4m = format == CapturedFormat::Y4m;
         if y4m {
-            read_y4m_header(&mut *reader, &name, (width, height))?;
+            read_y4m_header(&mut *reader, &name, (width, height), limits)?;
         }
         Ok(Self {
             name,
@@ -164,6 +182,7 @@ impl Captured {
             height,
             frames: Frames::Stream { reader, y4m },
             read: 0,
+            limits,
         })
     }
 
@@ -171,6 +190,7 @@ impl Captured {
         path: &Path,
         format: Option<CapturedFormat>,
         (width, height): (usize, usize),
+        limits: Limits,
     ) -> Result<Self, HostError> {
         match format {
             Some(CapturedFormat::PngDir) if !path.is_dir() => {
@@ -211,6 +231,7 @@ impl Captured {
             height,
             frames: Frames::Pngs(files),
             read: 0,
+            limits,
         })
     }
 
@@ -253,7 +274,7 @@ impl Captured {
                 let Some(file) = files.get(index) else {
                     return Ok(false);
                 };
-                let image = image_io::read_rgb8(file)?;
+                let image = image_io::read_rgb8(file, self.limits)?;
                 if (image.width, image.height) != (w, h) {
                     return Err(input_error(
                         file,
@@ -301,13 +322,14 @@ fn read_y4m_header(
     reader: &mut dyn BufRead,
     name: &Path,
     (width, height): (usize, usize),
+    limits: Limits,
 ) -> Result<(), HostError> {
     let line = match y4m::read_line(reader) {
         Ok(Some(line)) => line,
         Ok(None) => return Err(input_error(name, "empty; expected a Y4M header")),
         Err(e) => return Err(input_error(name, e)),
     };
-    let header = y4m::parse_header(&line).map_err(|e| e.about(name))?;
+    let header = y4m::parse_header(&line, limits).map_err(|e| e.about(name))?;
     if header.chroma != "444" {
         return Err(input_error(
             name,
@@ -374,6 +396,7 @@ mod tests {
                 y4m,
             },
             read: 0,
+            limits: Limits::default(),
         }
     }
 
@@ -413,6 +436,7 @@ mod tests {
                 &mut io::Cursor::new(h.as_bytes()),
                 Path::new("c.y4m"),
                 (2, 1),
+                Limits::default(),
             )
             .map_err(|e| e.to_string())
         };

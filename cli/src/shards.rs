@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use tempfile::TempPath;
 
-use crate::HostError;
+use reynoldsflow_host::HostError;
 
 /// The names of one process's shards: `shard-NNNNNN.tar`, or with a shard
 /// of several, `shard-IIII-NNNNNN.tar` (`I` at least 4 digits).
