@@ -143,7 +143,7 @@ pub fn parse_header(line: &[u8], limits: Limits) -> Result<Header, HeaderError> 
 
 /// Read one `\n`-terminated line (without the newline). `Ok(None)` at a
 /// clean end of input; an error if the input ends inside the line or the
-/// line is longer than [`MAX_LINE`].
+/// line is longer than 4096 bytes.
 pub fn read_line(reader: &mut dyn BufRead) -> Result<Option<Vec<u8>>, String> {
     let mut line = Vec::new();
     let n = reader
