@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::sequence::{folder, input_error, peek, read_full, y4m};
 use reynoldsflow_host::settings::Choice;
-use reynoldsflow_host::{HostError, image_io};
+use reynoldsflow_host::{HostError, io::image_file};
 
 /// The format of a capture (`--captured-format`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -274,7 +274,7 @@ impl Captured {
                 let Some(file) = files.get(index) else {
                     return Ok(false);
                 };
-                let image = image_io::read_rgb8(file, self.limits)?;
+                let image = image_file::read_rgb8(file, self.limits)?;
                 if (image.width, image.height) != (w, h) {
                     return Err(input_error(
                         file,

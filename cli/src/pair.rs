@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use reynoldsflow_core::Error as CoreError;
 
 use super::run::ComputeArgs;
-use reynoldsflow_host::{HostError, atomic, image_io, npy};
+use reynoldsflow_host::{HostError, io::atomic, io::image_file, io::npy};
 
 /// Arguments of `reynoldsflow pair`.
 #[derive(Debug, clap::Args)]
@@ -34,8 +34,8 @@ pub struct PairArgs {
 pub fn run(args: &PairArgs) -> Result<(), HostError> {
     let limits = args.limits.limits();
     let compute = args.compute.compute()?;
-    let prev = image_io::read_gray(&args.f0, limits)?;
-    let next = image_io::read_gray(&args.f1, limits)?;
+    let prev = image_file::read_gray(&args.f0, limits)?;
+    let next = image_file::read_gray(&args.f1, limits)?;
     if prev.size() != next.size() {
         return Err(HostError::FrameSizes {
             prev_path: args.f0.clone(),
@@ -55,7 +55,7 @@ pub fn run(args: &PairArgs) -> Result<(), HostError> {
     let p = &output.planes;
     let npy = |data: &[f64]| npy::encode(p.height(), p.width(), data);
     let (vcx, vcy, vdx, vdy) = (npy(&p.v_c.u), npy(&p.v_c.v), npy(&p.v_d.u), npy(&p.v_d.v));
-    let png = image_io::encode_png(p.width(), p.height(), &output.rep)?;
+    let png = image_file::encode_png(p.width(), p.height(), &output.rep)?;
     let files: [(&str, &[u8]); 5] = [
         ("vcx.npy", &vcx),
         ("vcy.npy", &vcy),

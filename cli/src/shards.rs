@@ -164,7 +164,7 @@ impl ShardWriter {
         let prefix = format!(".{name}.");
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp");
-        // As crate::atomic does: 0666 through the umask, an ordinary file's
+        // As crate::io::atomic does: 0666 through the umask, an ordinary file's
         // permissions once renamed (tempfile's own are 0600).
         #[cfg(unix)]
         {

@@ -6,7 +6,7 @@ use std::fs;
 use std::path::Path;
 use std::process::Command;
 
-use reynoldsflow_host::image_io;
+use reynoldsflow_host::io::image_file;
 use reynoldsflow_host::limits::Limits;
 
 const BIN: &str = env!("CARGO_BIN_EXE_reynoldsflow");
@@ -22,7 +22,7 @@ const FIGURES: [&str; 6] = [
 
 /// Distinct RGB colours and the share of non-white pixels of a PNG.
 fn ink(path: &Path) -> (usize, f64) {
-    let img = image_io::read_rgb8(path, Limits::default())
+    let img = image_file::read_rgb8(path, Limits::default())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut colours: Vec<[u8; 3]> = img.bytes.chunks(3).map(|p| [p[0], p[1], p[2]]).collect();
     let inked = colours.iter().filter(|p| **p != [255, 255, 255]).count();
@@ -74,7 +74,7 @@ fn quick_eval_writes_a_report_a_csv_and_figures() {
         );
     }
     for picture in ["frame_texture.png", "representation_checkerboard.png"] {
-        let img = image_io::read_rgb8(&out.join(picture), Limits::default()).unwrap();
+        let img = image_file::read_rgb8(&out.join(picture), Limits::default()).unwrap();
         assert_eq!((img.width, img.height), (96, 72), "{picture}");
     }
 

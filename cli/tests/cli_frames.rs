@@ -205,7 +205,7 @@ fn resize_and_short_side_give_the_resampled_frames_pairs() {
         assert!(err.contains(&format!("of {w}x{h} of")), "{err}");
         assert_eq!(names(&out, ".png"), ["000000.png", "000001.png"]);
         for k in 0..2 {
-            let png = reynoldsflow_host::image_io::read_rgb8(
+            let png = reynoldsflow_host::io::image_file::read_rgb8(
                 &out.join(format!("{k:06}.png")),
                 Limits::default(),
             )

@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 
 use image::{ExtendedColorType, ImageEncoder, codecs::png::PngEncoder};
 use reynoldsflow_host::limits::Limits;
-use reynoldsflow_host::{image_io, npy};
+use reynoldsflow_host::{io::image_file, io::npy};
 
 const BIN: &str = env!("CARGO_BIN_EXE_reynoldsflow");
 const VECTORS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/vectors");
@@ -72,7 +72,7 @@ fn field_errors(ours: &[Vec<f64>; 4], theirs: &[Vec<f64>; 4]) -> [f64; 4] {
 fn both_engines_write_the_five_files() {
     for name in ["translate_64x48", "row_7x1"] {
         let dir = case(name);
-        let reference = image_io::read_rgb8(&dir.join("rep.png"), Limits::default()).unwrap();
+        let reference = image_file::read_rgb8(&dir.join("rep.png"), Limits::default()).unwrap();
         let (w, h) = (reference.width, reference.height);
         let vectors = read_fields(&dir, w, h);
         let tmp = tempfile::tempdir().unwrap();
@@ -98,7 +98,7 @@ fn both_engines_write_the_five_files() {
                 ["rep.png", "vcx.npy", "vcy.npy", "vdx.npy", "vdy.npy"]
             );
             let fields = read_fields(&out, w, h);
-            let rep = image_io::read_rgb8(&out.join("rep.png"), Limits::default()).unwrap();
+            let rep = image_file::read_rgb8(&out.join("rep.png"), Limits::default()).unwrap();
             assert_eq!((rep.width, rep.height), (w, h));
             let err = field_errors(&fields, &vectors);
             let differ = rep

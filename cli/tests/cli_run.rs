@@ -9,7 +9,7 @@ use std::fs;
 use std::path::Path;
 
 use reynoldsflow_host::outputs::{decode_npy_xy, flo};
-use reynoldsflow_host::{Gray, npy};
+use reynoldsflow_host::{Gray, io::npy};
 use run_support::*;
 
 const W: usize = 40;

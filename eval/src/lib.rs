@@ -32,7 +32,7 @@ pub mod scenes;
 pub mod truth;
 
 use protocol::{EvalConfig, SequenceResult};
-use reynoldsflow_host::{HostError, atomic, image_io};
+use reynoldsflow_host::{HostError, io::atomic, io::image_file};
 use scenes::{Pattern, Scenario};
 
 /// What [`run`] wrote.
@@ -119,12 +119,12 @@ fn outputs(
             .flat_map(|&g| [g, g, g])
             .collect();
         let name = format!("frame_{p}.png");
-        files.push((name.clone(), image_io::encode_png(w, h, &gray_rgb)?));
+        files.push((name.clone(), image_file::encode_png(w, h, &gray_rgb)?));
         images.push((name, format!("frame 0 of the {p} zoom-in sequence")));
         let name = format!("representation_{p}.png");
         files.push((
             name.clone(),
-            image_io::encode_png(w, h, &preview.representation)?,
+            image_file::encode_png(w, h, &preview.representation)?,
         ));
         images.push((
             name,

@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 
-use reynoldsflow_host::image_io;
+use reynoldsflow_host::io::image_file;
 
 /// Colour of each curve kind: eight distinguishable hues.
 pub const PALETTE: [RGBColor; 8] = [
@@ -102,7 +102,7 @@ impl Figure {
             }
             root.present().map_err(|e| e.to_string())?;
         }
-        image_io::encode_png(w as usize, h as usize, &rgb).map_err(|e| e.to_string())
+        image_file::encode_png(w as usize, h as usize, &rgb).map_err(|e| e.to_string())
     }
 
     /// Every distinct curve label once, with its colour and dash.
@@ -273,7 +273,7 @@ mod tests {
             size: (500, 300),
         };
         let png = fig.to_png().unwrap();
-        let img = image_io::decode_gray(&png, Limits::default()).unwrap();
+        let img = image_file::decode_gray(&png, Limits::default()).unwrap();
         assert_eq!(img.size(), (500, 300));
         let dark = img.pixels.iter().filter(|&&p| p < 128).count();
         assert!(dark > 1000, "{dark} dark pixels");

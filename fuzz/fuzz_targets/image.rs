@@ -5,11 +5,11 @@
 
 use libfuzzer_sys::fuzz_target;
 use reynoldsflow_fuzz::small_limit;
-use reynoldsflow_host::image_io;
+use reynoldsflow_host::io::image_file;
 
 fuzz_target!(|data: &[u8]| {
     let limits = small_limit();
-    if let Ok(gray) = image_io::decode_gray(data, limits) {
+    if let Ok(gray) = image_file::decode_gray(data, limits) {
         let (w, h) = gray.size();
         assert!(w > 0 && h > 0);
         assert_eq!(gray.pixels.len(), w * h);

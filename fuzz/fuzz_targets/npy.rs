@@ -4,7 +4,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use reynoldsflow_host::{npy, outputs};
+use reynoldsflow_host::{io::npy, outputs};
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(array) = npy::decode(data) {

@@ -19,30 +19,24 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-pub mod atomic;
-pub mod content_hash;
 pub mod cues;
 pub mod dataset;
-mod decoder_guard;
 pub mod engine;
 mod error;
 pub mod flow;
 pub mod gray;
-pub mod image_io;
+pub mod io;
 pub mod limits;
-pub mod npy;
 pub mod outputs;
-pub mod page_buffer;
 pub mod pair_stream;
 pub mod pipeline;
 pub mod reference;
 pub mod sequence;
 pub mod settings;
 pub mod stop;
-pub mod viz;
 pub mod workers;
 
-pub use decoder_guard::panic_message;
+pub use io::decoder_guard::panic_message;
 pub use error::{HostError, ImageProblem};
 pub use flow::{Flow, FlowPlanes};
 pub use gray::{Gray, luma_bt601};

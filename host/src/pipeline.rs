@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 use crate::HostError;
 use crate::engine::{Compute, Image, PairEngine};
 use crate::outputs::{DirWriter, OutputSpec, StreamFormat, y4m_frame_into, y4m_header};
-use crate::page_buffer::{ByteBuffer, PageBytes};
+use crate::engine::page_buffer::{ByteBuffer, PageBytes};
 use crate::sequence::{Frame, FrameSource};
 use crate::stop::Stop;
 

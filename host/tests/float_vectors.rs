@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::reference::{self, FLAT_RANGE, FloatFlow, FloatParams, FloatScaling};
 use reynoldsflow_host::settings::parse_ratio;
-use reynoldsflow_host::{Gray, image_io, npy};
+use reynoldsflow_host::{Gray, io::image_file, io::npy};
 
 const VECTORS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/vectors");
 
@@ -53,8 +53,8 @@ fn cases() -> Vec<Case> {
     dirs.into_iter()
         .map(|dir| Case {
             name: dir.file_name().unwrap().to_string_lossy().into_owned(),
-            prev: image_io::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap(),
-            next: image_io::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap(),
+            prev: image_file::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap(),
+            next: image_file::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap(),
             json: serde_json::from_str(&fs::read_to_string(dir.join("case.json")).unwrap())
                 .unwrap(),
             dir,
@@ -171,7 +171,7 @@ fn fields_match_every_vector() {
 /// or off by one at a rounding tie of `x · k + ½`. Returns the tie count.
 fn compare_rep(case: &Case, file: &str, flow: &FloatFlow, scaling: FloatScaling) -> usize {
     let ours = reference::representation(flow, &case.prev, scaling);
-    let theirs = image_io::read_rgb8(&case.dir.join(file), Limits::default()).unwrap();
+    let theirs = image_file::read_rgb8(&case.dir.join(file), Limits::default()).unwrap();
     assert_eq!(
         (theirs.width, theirs.height),
         (flow.width(), flow.height()),

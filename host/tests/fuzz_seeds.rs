@@ -13,7 +13,7 @@ use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::outputs::{encode_npy_xy, flo};
-use reynoldsflow_host::{image_io, npy};
+use reynoldsflow_host::{io::image_file, io::npy};
 
 /// `target/name` → bytes.
 type Seeds = BTreeMap<String, Vec<u8>>;
@@ -148,7 +148,7 @@ fn image_seeds(seeds: &mut Seeds) {
         seeds,
         "image",
         "rep.png",
-        &image_io::encode_png(6, 4, &texture(6, 4, 1, 3)).unwrap(),
+        &image_file::encode_png(6, 4, &texture(6, 4, 1, 3)).unwrap(),
     );
     for (name, color, channels) in [
         ("gray.jpg", ExtendedColorType::L8, 1),
@@ -265,7 +265,7 @@ fn the_committed_seed_corpus_is_the_generated_one() {
         "gray.jpg",
         "rgb.jpg",
     ] {
-        image_io::decode_gray(&seeds[&format!("image/{name}")], Limits::default()).unwrap();
+        image_file::decode_gray(&seeds[&format!("image/{name}")], Limits::default()).unwrap();
     }
     flo::decode(&seeds["flo/3x2.flo"]).unwrap();
     for name in ["plane.npy", "fortran.npy", "big-endian.npy"] {

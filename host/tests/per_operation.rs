@@ -13,7 +13,7 @@ use reynoldsflow_host::sequence::y4m::Y4mSource;
 use reynoldsflow_host::sequence::{self, FrameSource, InputSpec};
 use reynoldsflow_host::settings::{EngineKind, ScaleArg};
 use reynoldsflow_host::stop::Stop;
-use reynoldsflow_host::{HostError, image_io};
+use reynoldsflow_host::{HostError, io::image_file};
 
 const W: usize = 16;
 const H: usize = 8;
@@ -56,7 +56,7 @@ fn two_operations_with_different_limits_do_not_affect_each_other() {
                         && err.to_string().starts_with("max_pixels: "),
                     "{err}"
                 );
-                let err = image_io::decode_gray(&pgm(), tight).unwrap_err();
+                let err = image_file::decode_gray(&pgm(), tight).unwrap_err();
                 assert!(
                     err.to_string().contains("exceeds the limit of 127 pixels"),
                     "{err}"
@@ -71,7 +71,7 @@ fn two_operations_with_different_limits_do_not_affect_each_other() {
                     frames += 1;
                 }
                 assert_eq!(frames, 3);
-                assert_eq!(image_io::decode_gray(&pgm(), ample).unwrap().size(), (W, H));
+                assert_eq!(image_file::decode_gray(&pgm(), ample).unwrap().size(), (W, H));
             }
         });
         refused.join().unwrap();

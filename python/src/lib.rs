@@ -25,7 +25,7 @@ use reynoldsflow_host::pair_stream::{self, PairStream};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
 use reynoldsflow_host::settings::{FirstFrame, Setting};
-use reynoldsflow_host::{Gray, HostError, atomic, workers};
+use reynoldsflow_host::{Gray, HostError, io::atomic, workers};
 
 mod errors;
 mod frames;

@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::reference::FloatFlow;
-use reynoldsflow_host::{Flow, Gray, image_io, npy};
+use reynoldsflow_host::{Flow, Gray, io::image_file, io::npy};
 
 use crate::{Pattern, Rng, frame_pair, vector_cases, vectors_dir};
 
@@ -598,15 +598,15 @@ fn vectors() -> Vec<Case> {
         .into_iter()
         .map(|name| {
             let dir = vectors_dir().join(&name);
-            let prev = image_io::read_gray(&dir.join("f0.pgm"), Limits::default()).expect("f0.pgm");
-            let next = image_io::read_gray(&dir.join("f1.pgm"), Limits::default()).expect("f1.pgm");
+            let prev = image_file::read_gray(&dir.join("f0.pgm"), Limits::default()).expect("f0.pgm");
+            let next = image_file::read_gray(&dir.join("f1.pgm"), Limits::default()).expect("f1.pgm");
             let plane = |p: &str| {
                 npy::read(&dir.join(format!("{p}.npy")))
                     .unwrap_or_else(|e| panic!("{name}/{p}.npy: {e}"))
                     .data
             };
             let rep = |p: &str| {
-                image_io::read_rgb8(&dir.join(p), Limits::default())
+                image_file::read_rgb8(&dir.join(p), Limits::default())
                     .unwrap_or_else(|e| panic!("{name}/{p}: {e}"))
                     .bytes
             };

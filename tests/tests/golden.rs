@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use fixed::types::U16F16;
 use reynoldsflow_core::{Params, Scaling};
 use reynoldsflow_host::engine::{FixedOutput, compute_fixed};
-use reynoldsflow_host::image_io;
+use reynoldsflow_host::io::image_file;
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_tests::{vector_cases, vectors_dir};
 
@@ -117,7 +117,7 @@ fn field_changes(old: &[f64], new: &[f64], pixels: usize) -> String {
 /// What blessing `bytes` changes in the golden output `name` at `path`.
 fn change_note(path: &std::path::Path, name: &str, bytes: &[u8], pixels: usize) -> String {
     let old = match name.ends_with(".png") {
-        true => image_io::read_rgb8(path, Limits::default())
+        true => image_file::read_rgb8(path, Limits::default())
             .map(|img| img.bytes)
             .ok(),
         false => std::fs::read(path).ok(),
@@ -147,8 +147,8 @@ fn fixed_core_output_equals_the_golden_bytes() {
     let mut notes = format!("{CHANGES} (not checked; written by blessing)\n");
     for case in vector_cases() {
         let dir = vectors_dir().join(&case);
-        let f0 = image_io::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap();
-        let f1 = image_io::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap();
+        let f0 = image_file::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap();
+        let f1 = image_file::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap();
         let minmax =
             compute_fixed(&f0, &f1, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
         let fixed = compute_fixed(&f0, &f1, Params::DEFAULT, None, fixed).unwrap();
@@ -173,13 +173,13 @@ fn fixed_core_output_equals_the_golden_bytes() {
                 writeln!(notes, "{case} {name}: {note}").unwrap();
                 std::fs::create_dir_all(path.parent().unwrap()).unwrap();
                 match is_png {
-                    true => image_io::write_png(&path, f0.width, f0.height, &bytes).unwrap(),
+                    true => image_file::write_png(&path, f0.width, f0.height, &bytes).unwrap(),
                     false => std::fs::write(&path, &bytes).unwrap(),
                 }
                 continue;
             }
             let golden = match is_png {
-                true => image_io::read_rgb8(&path, Limits::default())
+                true => image_file::read_rgb8(&path, Limits::default())
                     .map(|img| img.bytes)
                     .map_err(|e| e.to_string()),
                 false => std::fs::read(&path).map_err(|e| e.to_string()),

@@ -11,7 +11,7 @@ use reynoldsflow_core::{IntensityScale, Params, Scaling};
 use reynoldsflow_host::engine::bytes::{self, Isa};
 use reynoldsflow_host::engine::compute_fixed_on;
 use reynoldsflow_host::limits::Limits;
-use reynoldsflow_host::{Gray, image_io};
+use reynoldsflow_host::{Gray, io::image_file};
 use reynoldsflow_tests::{Pattern, frame_pair, vector_cases, vectors_dir};
 
 const SCALINGS: [Scaling; 2] = [
@@ -57,8 +57,8 @@ fn the_cpu_has_what_the_suite_requires() {
 fn simd_and_portable_agree_on_the_vectors() {
     for case in vector_cases() {
         let dir = vectors_dir().join(&case);
-        let f0 = image_io::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap();
-        let f1 = image_io::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap();
+        let f0 = image_file::read_gray(&dir.join("f0.pgm"), Limits::default()).unwrap();
+        let f1 = image_file::read_gray(&dir.join("f1.pgm"), Limits::default()).unwrap();
         same_on_both(&case, &f0, &f1, Params::DEFAULT, None);
     }
 }

@@ -11,7 +11,7 @@ use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use reynoldsflow_host::limits::Limits;
-use reynoldsflow_host::{Gray, image_io};
+use reynoldsflow_host::{Gray, io::image_file};
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_reynoldsflow");
 
@@ -190,7 +190,7 @@ pub fn temp_files(dir: &Path) -> Vec<String> {
 
 /// The RGB8 pixels of a PNG.
 pub fn rgb(path: &Path) -> Vec<u8> {
-    image_io::read_rgb8(path, Limits::default())
+    image_file::read_rgb8(path, Limits::default())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
         .bytes
 }

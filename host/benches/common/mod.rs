@@ -107,7 +107,7 @@ pub fn moving_pair(w: usize, h: usize) -> (Vec<u8>, Vec<u8>) {
 /// A gray image file (PGM, PNG, …) as `(width, height, pixels)`.
 pub fn read_gray(path: &str) -> (usize, usize, Vec<u8>) {
     let gray =
-        reynoldsflow_host::image_io::read_gray(std::path::Path::new(path), Limits::default())
+        reynoldsflow_host::io::image_file::read_gray(std::path::Path::new(path), Limits::default())
             .unwrap_or_else(|e| panic!("{path}: {e}"));
     (gray.width, gray.height, gray.pixels)
 }

@@ -32,7 +32,7 @@ use serde_json::{Value, json};
 use xxhash_rust::xxh3::Xxh3;
 
 use crate::HostError;
-use crate::content_hash::{hash_bytes, hash_file};
+use crate::io::content_hash::{hash_bytes, hash_file};
 use crate::sequence::folder::is_frame_file;
 
 use super::Item;
@@ -258,7 +258,7 @@ pub fn commit(
         .filter(|p| !new.contains(p.as_str()))
         .collect();
     let journal = dir.join(JOURNAL);
-    crate::atomic::write_file(&journal, manifest.text(&replaces).as_bytes())?;
+    crate::io::atomic::write_file(&journal, manifest.text(&replaces).as_bytes())?;
     remove_if_present(&dir.join(MANIFEST))?;
     for rel in &replaces {
         remove_if_present(&dir.join(rel))?;

@@ -9,7 +9,7 @@ use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scal
 
 use super::image::PairFields;
 use super::lane::Lane;
-use crate::page_buffer::ByteBuffer;
+use crate::engine::page_buffer::ByteBuffer;
 use crate::reference::{self, FloatParams, FloatScaling};
 use crate::settings::{EngineKind, ScaleArg, Setting, Settings, TileSize};
 use crate::{Gray, HostError};

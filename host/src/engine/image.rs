@@ -4,7 +4,7 @@
 
 use crate::FlowPlanes;
 use crate::settings::Variant;
-use crate::viz;
+use crate::engine::viz;
 
 /// One result: the fields of a frame pair and its representation.
 #[derive(Clone, Debug, PartialEq)]

@@ -15,7 +15,7 @@ use super::bands::prepare;
 use super::bytes::{self, Isa, Pass};
 use super::memory::HostEngine;
 use super::sinks::{Kept, KeptMagnitudes, PixelRows};
-use crate::page_buffer::ByteBuffer;
+use crate::engine::page_buffer::ByteBuffer;
 use crate::{Flow, FlowPlanes, Gray, HostError};
 
 /// The core's output for a frame pair, row-major planes of `width · height`.

@@ -34,7 +34,9 @@ pub mod compute;
 mod image;
 mod lane;
 mod memory;
+pub mod page_buffer;
 mod sinks;
+pub mod viz;
 
 pub use compute::Compute;
 pub use image::{Image, PairFields};
@@ -46,7 +48,7 @@ use compute::tile_error;
 use lane::Lane;
 use sinks::{Exact, PixelRows, TileRows};
 
-use crate::page_buffer::ByteBuffer;
+use crate::engine::page_buffer::ByteBuffer;
 use crate::settings::Settings;
 use crate::{Gray, HostError, workers};
 

@@ -9,7 +9,7 @@ use reynoldsflow_core::{ExtremesSink, FlowPixel, Pixels, Plan, Sink};
 use super::bytes::{self, Isa};
 use super::image::Image;
 use crate::HostError;
-use crate::page_buffer::{ByteBuffer, PageBuffer};
+use crate::engine::page_buffer::{ByteBuffer, PageBuffer};
 
 /// One tile's (or the whole frame's) segments of a frame-sized plane of
 /// pixels, and the extremes of the magnitudes it received: the sink that

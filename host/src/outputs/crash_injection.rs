@@ -29,7 +29,7 @@ pub(crate) fn abort_hook(dir: &Path, files: &[(PathBuf, Vec<u8>)]) {
     if let Some((rel, bytes)) = files.first() {
         let path = dir.join(rel);
         let parent = path.parent().unwrap_or(dir);
-        if let Ok(tmp) = crate::atomic::temp_builder().tempfile_in(parent) {
+        if let Ok(tmp) = crate::io::atomic::temp_builder().tempfile_in(parent) {
             let _ = tmp.as_file().write_all(&bytes[..bytes.len() / 2]);
             let _ = tmp.keep();
         }

@@ -5,7 +5,7 @@
 //! | file | with | content |
 //! |---|---|---|
 //! | `DIR/STEM.png` | (default; `--no-rep` drops it) | RGB8 image of the `--variant` ([`Variant`]) |
-//! | `DIR/hsv/STEM.png` | `--viz` | colour-wheel coding of `v_R` ([`crate::viz`]) |
+//! | `DIR/hsv/STEM.png` | `--viz` | colour-wheel coding of `v_R` ([`crate::engine::viz`]) |
 //! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64 (or `--npy-dtype f32`/`f16`: rounded to nearest), shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
 //! | `DIR/v_R/STEM.flo` (or `v_c/`, `v_d/`) | `--flo` (or `--flo=v_c,…`) | Middlebury `.flo` ([`flo`]): `f32` `(u, v)` |
 //!
@@ -29,10 +29,10 @@ use std::sync::{Arc, Mutex};
 use npyz::WriterBuilder;
 
 use crate::engine::Image;
-pub use crate::image_io::{JpegSubsampling, PngCompression};
-use crate::page_buffer::ByteBuffer;
+pub use crate::io::image_file::{JpegSubsampling, PngCompression};
+use crate::engine::page_buffer::ByteBuffer;
 use crate::settings::choices;
-use crate::{HostError, atomic, image_io};
+use crate::{HostError, io::atomic, io::image_file};
 use background::Stage;
 
 mod background;
@@ -138,12 +138,12 @@ impl ImageFormat {
     pub fn encode(self, width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, HostError> {
         match self {
             ImageFormat::Png { compression } => {
-                image_io::encode_png_with(width, height, rgb, compression)
+                image_file::encode_png_with(width, height, rgb, compression)
             }
             ImageFormat::Jpeg {
                 quality,
                 subsampling,
-            } => image_io::encode_jpeg(width, height, rgb, quality, subsampling),
+            } => image_file::encode_jpeg(width, height, rgb, quality, subsampling),
         }
     }
 }
@@ -427,7 +427,7 @@ fn npy_bytes<T: npyz::Serialize + npyz::AutoSerialize>(
 
 /// Parse a `.npy` of shape `(H, W, 2)` float64: `(H, W, x plane, y plane)`.
 pub fn decode_npy_xy(bytes: &[u8]) -> Result<(usize, usize, Vec<f64>, Vec<f64>), String> {
-    let npy = crate::npy::open(bytes)?;
+    let npy = crate::io::npy::open(bytes)?;
     let [h, w, 2] = *npy.shape() else {
         return Err(format!("shape {:?} is not (H, W, 2)", npy.shape()));
     };
@@ -534,7 +534,7 @@ pub struct Written {
     pub path: String,
     /// Bytes.
     pub size: u64,
-    /// XXH3-128 of the bytes, hex ([`crate::content_hash::hash_bytes`]).
+    /// XXH3-128 of the bytes, hex ([`crate::io::content_hash::hash_bytes`]).
     pub hash: String,
 }
 
@@ -731,7 +731,7 @@ impl Folder {
             written.push(Written {
                 path: path.join("/"),
                 size: bytes.len() as u64,
-                hash: crate::content_hash::hash_bytes(bytes),
+                hash: crate::io::content_hash::hash_bytes(bytes),
             });
         }
         Ok(())

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Frame, FrameSource, input_error, natural};
 use crate::limits::Limits;
-use crate::{HostError, image_io};
+use crate::{HostError, io::image_file};
 
 /// File extensions read as frames (compared case-insensitively).
 pub const FRAME_EXTENSIONS: [&str; 6] = ["png", "jpg", "jpeg", "pgm", "ppm", "pnm"];
@@ -205,7 +205,7 @@ impl FrameSource for FolderSource {
         let Some(path) = self.files.get(self.next) else {
             return Ok(None);
         };
-        let gray = image_io::read_gray(path, self.limits)?;
+        let gray = image_file::read_gray(path, self.limits)?;
         if let Some((last_path, size)) = &self.last
             && gray.size() != *size
         {

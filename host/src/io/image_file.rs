@@ -18,7 +18,7 @@ use image::{
 
 use crate::limits::Limits;
 use crate::settings::choices;
-use crate::{Gray, HostError, ImageProblem, atomic, decoder_guard};
+use crate::{Gray, HostError, ImageProblem, io::atomic, io::decoder_guard};
 
 /// An RGB8 image, row-major, `3 · width · height` bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -306,7 +306,7 @@ mod tests {
     fn a_jpeg_that_panics_its_decoder_is_refused() {
         // Found by fuzzing: zune-jpeg 0.5.15 unwraps `None` in its AVX2 IDCT
         // on this file (on CPUs without AVX2 it may decode or fail plainly).
-        let bytes = include_bytes!("../tests/data/jpeg-decoder-panic.jpg");
+        let bytes = include_bytes!("../../tests/data/jpeg-decoder-panic.jpg");
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             let Err(ImageProblem::Decode(message)) = decode_gray(bytes, Limits::default()) else {

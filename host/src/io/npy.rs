@@ -6,7 +6,7 @@ use std::path::Path;
 
 use npyz::WriterBuilder;
 
-use crate::{HostError, atomic};
+use crate::{HostError, io::atomic};
 
 /// A 2-D float64 array, row-major.
 #[derive(Clone, Debug, PartialEq)]
