@@ -7,7 +7,7 @@
 //! to build and runs beside ROS 2 nodes of any DDS vendor on the graph.
 //! Which frame pairs with which and which header each output carries is
 //! the host's pair stream (`reynoldsflow_host::pair_stream`), each pair's
-//! image its pair engine (`reynoldsflow_host::pair_engine`) and the cues
+//! image its pair engine (`reynoldsflow_host::engine::PairEngine`) and the cues
 //! its `cues`, as in the GStreamer element.
 //!
 //! | module | what |
