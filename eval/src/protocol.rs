@@ -4,15 +4,14 @@
 
 use std::time::{Duration, Instant};
 
-use reynoldsflow_core::{Params, Scaling};
-
 use super::baselines::{HornSchunck, LucasKanade};
 use super::metrics;
 use super::scenes::{Pattern, Scenario, SceneSpec, Sequence};
 use super::truth::{self, Pose};
 use reynoldsflow_host::Flow;
 use reynoldsflow_host::reference::{self, FloatFlow, FloatParams, FloatScaling};
-use reynoldsflow_host::{Gray, HostError, engine, workers};
+use reynoldsflow_host::settings::Settings;
+use reynoldsflow_host::{Gray, HostError, workers};
 
 /// A flow estimate under evaluation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -273,6 +272,8 @@ fn evaluate_sequence(
             t.1 += since.elapsed();
         }
     };
+    // The fixed engine as every front end holds it, at the SPEC's defaults.
+    let fixed_engine = Settings::default().compute()?;
     let small = FloatParams {
         intensity_scale: 1.0 / 255.0 / config.small_scale_divisor,
         lambda: 1e-4 / config.small_scale_divisor.powi(2),
@@ -294,8 +295,7 @@ fn evaluate_sequence(
         let rf: FloatFlow = reference::compute(prev, next, &FloatParams::default())?;
         clock(Method::RfVr, t);
         let t = Instant::now();
-        let fixed =
-            engine::compute_fixed(prev, next, Params::DEFAULT, None, Scaling::PerFrameMinMax)?;
+        let fixed = fixed_engine.pair(prev, next)?;
         clock(Method::RfVrFixed, t);
         let t = Instant::now();
         let rf_small = reference::compute(prev, next, &small)?;

@@ -15,7 +15,6 @@ use reynoldsflow_core::{Config, FramePair, Params, Plan};
 use reynoldsflow_cues::{MotionCues, Region, grid_cells};
 use reynoldsflow_host::Gray;
 use reynoldsflow_host::HostError;
-use reynoldsflow_host::engine;
 use reynoldsflow_host::outputs::{OutputSpec, Variant};
 use reynoldsflow_host::settings::{
     self as values, Choice, FirstFrame, ScaleArg, Settings, parse_intensity_scale,
@@ -390,8 +389,8 @@ fn core_regions(
         )
         .unwrap(),
     );
-    let mut memory = engine::HostEngine::new();
-    let plan = Plan::strips(config, engine::bands::strip_width(W)).unwrap();
+    let mut memory = reynoldsflow_host::internals::HostEngine::new();
+    let plan = Plan::strips(config, reynoldsflow_host::internals::strip_width(W)).unwrap();
     let job = plan
         .bind(FramePair::packed(&config, prev, next).unwrap())
         .unwrap();

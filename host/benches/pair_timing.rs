@@ -13,7 +13,7 @@
 //!   `Fixed` gains (one engine pass, as when streaming), one thread;
 //! - `serial-portable`: `serial` compiled for the baseline (SSE2 on x86-64)
 //!   whatever the CPU, where `serial` takes the widest instructions the CPU
-//!   has (`reynoldsflow_host::engine::bytes`);
+//!   has (`reynoldsflow_host::internals::bytes`);
 //! - `serial-minmax`: `serial` with per-frame min–max (two engine passes);
 //! - `parallel`: the host's one-pair engine (`PairEngine`, what the
 //!   GStreamer element and the ROS 2 node run), `Fixed` gains, on
@@ -31,7 +31,7 @@ use std::time::Instant;
 use reynoldsflow_core::Scaling;
 use reynoldsflow_host::Gray;
 use reynoldsflow_host::engine::PairEngine;
-use reynoldsflow_host::engine::bytes::Isa;
+use reynoldsflow_host::internals::bytes::Isa;
 use reynoldsflow_host::settings::{ScaleArg, Settings};
 
 mod common;

@@ -23,7 +23,7 @@ use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::reference::{FloatParams, FloatScaling, compute, representation};
 use reynoldsflow_host::settings::Settings;
 
-use reynoldsflow_host::engine::bytes::Isa;
+use reynoldsflow_host::internals::bytes::Isa;
 
 mod common;
 use common::{COLS, FIXED, SIZES, core_engine, moving_pair};

@@ -28,9 +28,9 @@ use reynoldsflow_core::{
 
 mod common;
 use common::{SIZES, moving_pair};
-use reynoldsflow_host::engine::HostEngine;
-use reynoldsflow_host::engine::bands::strip_width;
-use reynoldsflow_host::engine::bytes::{self, Isa, Pass};
+use reynoldsflow_host::internals::HostEngine;
+use reynoldsflow_host::internals::bytes::{self, Isa, Pass};
+use reynoldsflow_host::internals::strip_width;
 
 const FIXED: Scaling = Scaling::Fixed {
     k_d: U16F16::lit("8"),

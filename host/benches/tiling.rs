@@ -7,7 +7,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use reynoldsflow_core::Engine;
 
-use reynoldsflow_host::engine::bytes::Isa;
+use reynoldsflow_host::internals::bytes::Isa;
 
 mod common;
 use common::{COLS, FIXED, STRIPS, core_engine};

@@ -18,13 +18,14 @@
 //! ```
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+#![deny(unreachable_pub)]
 
 pub mod cues;
 pub mod dataset;
 pub mod engine;
 mod error;
-pub mod flow;
-pub mod gray;
+mod flow;
+mod gray;
 pub mod io;
 pub mod limits;
 pub mod outputs;
@@ -37,6 +38,20 @@ pub mod stop;
 pub mod workers;
 
 pub use io::decoder_guard::panic_message;
+
+/// Reached by the benches and by other crates' tests (the fixed engine
+/// without settings, per instruction set, as the oracle of the same-bytes
+/// tests), not an interface: front ends hold [`engine::PairEngine`].
+#[doc(hidden)]
+pub mod internals {
+    pub use crate::engine::bands::strip_width;
+    /// The engine pass per instruction set.
+    pub mod bytes {
+        pub use crate::engine::bytes::{Isa, Pass, best_name, run};
+    }
+    pub use crate::engine::lane::{FixedOutput, compute_fixed, compute_fixed_on, planes_of};
+    pub use crate::engine::memory::HostEngine;
+}
 pub use error::{HostError, ImageProblem};
 pub use flow::{Flow, FlowPlanes};
 pub use gray::{Gray, luma_bt601};

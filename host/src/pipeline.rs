@@ -25,9 +25,9 @@ use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::sync::{Arc, Mutex};
 
 use crate::HostError;
+use crate::engine::page_buffer::{ByteBuffer, PageBytes};
 use crate::engine::{Compute, Image, PairEngine};
 use crate::outputs::{DirWriter, OutputSpec, StreamFormat, y4m_frame_into, y4m_header};
-use crate::engine::page_buffer::{ByteBuffer, PageBytes};
 use crate::sequence::{Frame, FrameSource};
 use crate::stop::Stop;
 
@@ -1015,7 +1015,7 @@ mod tests {
     #[test]
     fn a_payload_is_taken_from_the_pool_when_first_written() {
         let pool = Pool::new();
-        let mut used = PageBytes::new();
+        let mut used = PageBytes::default();
         used.overwrite(5).unwrap().copy_from_slice(b"first");
         let mut payload = PooledBytes::new(&pool);
         pool.put(used);
@@ -1025,7 +1025,7 @@ mod tests {
         assert!(pool.take().is_none(), "a new buffer made beside a free one");
         assert_eq!(&*payload.into_inner(), b"abc");
         // Never written: an empty buffer, nothing taken.
-        pool.put(PageBytes::new());
+        pool.put(PageBytes::default());
         assert!(PooledBytes::new(&pool).into_inner().is_empty());
         assert!(pool.take().is_some());
     }

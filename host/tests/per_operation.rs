@@ -71,7 +71,10 @@ fn two_operations_with_different_limits_do_not_affect_each_other() {
                     frames += 1;
                 }
                 assert_eq!(frames, 3);
-                assert_eq!(image_file::decode_gray(&pgm(), ample).unwrap().size(), (W, H));
+                assert_eq!(
+                    image_file::decode_gray(&pgm(), ample).unwrap().size(),
+                    (W, H)
+                );
             }
         });
         refused.join().unwrap();

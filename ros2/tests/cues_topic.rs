@@ -227,7 +227,7 @@ fn cues_end_to_end() {
         let (a, b) = (frame(n), frame(n + 1));
         let (a, b) = (Gray::new(W, H, a).unwrap(), Gray::new(W, H, b).unwrap());
         let fields = compute.pair(&a, &b).unwrap();
-        let fixed = reynoldsflow_host::engine::compute_fixed(
+        let fixed = reynoldsflow_host::internals::compute_fixed(
             &a,
             &b,
             reynoldsflow_core::Params::DEFAULT,

@@ -598,8 +598,10 @@ fn vectors() -> Vec<Case> {
         .into_iter()
         .map(|name| {
             let dir = vectors_dir().join(&name);
-            let prev = image_file::read_gray(&dir.join("f0.pgm"), Limits::default()).expect("f0.pgm");
-            let next = image_file::read_gray(&dir.join("f1.pgm"), Limits::default()).expect("f1.pgm");
+            let prev =
+                image_file::read_gray(&dir.join("f0.pgm"), Limits::default()).expect("f0.pgm");
+            let next =
+                image_file::read_gray(&dir.join("f1.pgm"), Limits::default()).expect("f1.pgm");
             let plane = |p: &str| {
                 npy::read(&dir.join(format!("{p}.npy")))
                     .unwrap_or_else(|e| panic!("{name}/{p}.npy: {e}"))

@@ -31,7 +31,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use reynoldsflow_core::fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{IntensityScale, Params, Scaling};
-use reynoldsflow_host::engine::compute_fixed;
+use reynoldsflow_host::internals::compute_fixed;
 use reynoldsflow_host::reference::{self, FloatFlow, FloatParams, FloatScaling};
 use reynoldsflow_tests::corpus::{Case, Family, corpus};
 use reynoldsflow_tests::{ByteDiff, FieldError, byte_diff};

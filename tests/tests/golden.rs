@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 use fixed::types::U16F16;
 use reynoldsflow_core::{Params, Scaling};
-use reynoldsflow_host::engine::{FixedOutput, compute_fixed};
+use reynoldsflow_host::internals::{FixedOutput, compute_fixed};
 use reynoldsflow_host::io::image_file;
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_tests::{vector_cases, vectors_dir};

@@ -8,8 +8,8 @@
 
 use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{IntensityScale, Params, Scaling};
-use reynoldsflow_host::engine::bytes::{self, Isa};
-use reynoldsflow_host::engine::compute_fixed_on;
+use reynoldsflow_host::internals::bytes::{self, Isa};
+use reynoldsflow_host::internals::compute_fixed_on;
 use reynoldsflow_host::limits::Limits;
 use reynoldsflow_host::{Gray, io::image_file};
 use reynoldsflow_tests::{Pattern, frame_pair, vector_cases, vectors_dir};

@@ -7,12 +7,12 @@ use std::hint::black_box;
 
 use reynoldsflow_core::fixed::types::U16F16;
 use reynoldsflow_core::{Config, Engine, FramePair, Params, Plan, Scaling};
-use reynoldsflow_host::engine::bytes::{self, Isa, Pass};
+use reynoldsflow_host::internals::bytes::{self, Isa, Pass};
 use reynoldsflow_host::limits::Limits;
 /// Output columns of the strips of the compile-time engine the benches
 /// time (`Engine<COLS>`, arrays in a box, as a board would hold them);
 /// `reynoldsflow run` takes the host's wider strips
-/// (`engine::bands::strip_width`).
+/// (`internals::strip_width`).
 pub const STRIPS: usize = 128;
 
 /// Window columns of those strips.

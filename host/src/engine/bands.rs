@@ -25,7 +25,7 @@ use crate::{Gray, HostError};
 /// The widest of the host's default tiles: full-height strips of at most
 /// 1 280 columns (windows of 1 294, 409 KiB of working memory, inside a
 /// core's L2 cache on current x86-64 and Arm server cores).
-pub const MAX_STRIP_WIDTH: usize = 1280;
+pub(crate) const MAX_STRIP_WIDTH: usize = 1280;
 
 /// The host's default tile width for a frame `width` wide: the fewest
 /// full-height strips of at most [`MAX_STRIP_WIDTH`] columns, of equal
@@ -63,7 +63,7 @@ pub(crate) fn balanced_tile(width: usize, height: usize, threads: usize) -> (usi
 }
 
 /// Checked geometry of one pair: configuration, tiling and the frames.
-pub fn prepare<'a>(
+pub(crate) fn prepare<'a>(
     prev: &'a Gray,
     next: &'a Gray,
     params: Params,

@@ -7,7 +7,8 @@
 use fixed::types::{U16F16, U32F32};
 use reynoldsflow_core::{Config, Error as CoreError, IntensityScale, Params, Scaling};
 
-use super::image::PairFields;
+use super::PairEngine;
+use super::image::{Image, PairFields};
 use super::lane::Lane;
 use crate::engine::page_buffer::ByteBuffer;
 use crate::reference::{self, FloatParams, FloatScaling};
@@ -110,9 +111,10 @@ impl Compute {
         self.tile
     }
 
-    /// One pair, exactly as `reynoldsflow pair` computes it.
+    /// One pair's fields and representation, exactly as `reynoldsflow
+    /// pair` computes them: [`PairEngine::fields`] of a one-thread engine.
     pub fn pair(&self, prev: &Gray, next: &Gray) -> Result<PairFields, HostError> {
-        self.pair_with(&mut Lane::new(), prev, next)
+        PairEngine::with_pool(self.clone(), Image::default(), None, 0).fields(prev, next)
     }
 
     /// [`Self::pair`] with the reused buffers of `engine`.

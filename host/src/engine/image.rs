@@ -3,8 +3,8 @@
 //! wheel of the fields).
 
 use crate::FlowPlanes;
-use crate::settings::Variant;
 use crate::engine::viz;
+use crate::settings::Variant;
 
 /// One result: the fields of a frame pair and its representation.
 #[derive(Clone, Debug, PartialEq)]

@@ -28,20 +28,21 @@ use std::sync::{Arc, Mutex};
 
 use reynoldsflow_core::{ExtremesSink, FlowPixel, Params, Scaling};
 
-pub mod bands;
-pub mod bytes;
-pub mod compute;
+pub(crate) mod bands;
+pub(crate) mod bytes;
+mod compute;
 mod image;
-mod lane;
-mod memory;
-pub mod page_buffer;
+pub(crate) mod lane;
+pub(crate) mod memory;
+pub(crate) mod page_buffer;
 mod sinks;
-pub mod viz;
+pub(crate) mod viz;
 
 pub use compute::Compute;
 pub use image::{Image, PairFields};
-pub use lane::{FixedOutput, compute_fixed, compute_fixed_on, planes_of};
-pub use memory::HostEngine;
+
+use lane::planes_of;
+use memory::HostEngine;
 
 use bands::{Bands, balanced_tile, prepare, spread};
 use compute::tile_error;
@@ -359,6 +360,7 @@ mod tests {
     use super::*;
     use crate::settings::Variant;
     use crate::settings::{EngineKind, ScaleArg, Setting, TileSize};
+    use lane::compute_fixed;
 
     fn gray(width: usize, height: usize, seed: usize) -> Gray {
         let pixels = (0..width * height)

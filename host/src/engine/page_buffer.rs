@@ -36,16 +36,9 @@ impl ByteBuffer for Vec<u8> {
 /// module): the stream payloads of `run`, 2.8 MB a 1280×720 frame, a few
 /// of them per worker.
 #[derive(Default)]
-pub struct PageBytes {
+pub(crate) struct PageBytes {
     buffer: PageBuffer,
     len: usize,
-}
-
-impl PageBytes {
-    /// An empty buffer (no mapping until it first holds a byte).
-    pub fn new() -> Self {
-        Self::default()
-    }
 }
 
 impl ByteBuffer for PageBytes {
@@ -75,21 +68,16 @@ impl DerefMut for PageBytes {
 /// mapping, grown by remapping (the contents do not survive growth: every
 /// user overwrites them).
 #[derive(Default)]
-pub struct PageBuffer {
+pub(crate) struct PageBuffer {
     /// The mapping and where its aligned room starts.
     map: Option<(MmapMut, usize)>,
 }
 
 impl PageBuffer {
-    /// An empty buffer (no mapping until the first [`Self::bytes`]).
-    pub fn new() -> Self {
-        Self::default()
-    }
-
     /// The first `len` bytes (zero when fresh, else what was last written),
     /// remapped when the room is shorter. Fails only when the system
     /// refuses the memory.
-    pub fn bytes(&mut self, len: usize) -> Result<&mut [u8], HostError> {
+    pub(crate) fn bytes(&mut self, len: usize) -> Result<&mut [u8], HostError> {
         if self.room().len() < len {
             self.map = Some(map_anonymous(len)?);
         }
@@ -97,7 +85,7 @@ impl PageBuffer {
     }
 
     /// At least `len` `f32`s, as [`Self::bytes`].
-    pub fn floats(&mut self, len: usize) -> Result<&mut [f32], HostError> {
+    pub(crate) fn floats(&mut self, len: usize) -> Result<&mut [f32], HostError> {
         let bytes = len.checked_mul(size_of::<f32>()).ok_or_else(refused)?;
         // The room starts on a page, so it is aligned for `f32`.
         Ok(bytemuck::cast_slice_mut(self.bytes(bytes)?))
@@ -154,7 +142,7 @@ mod tests {
 
     #[test]
     fn bytes_take_the_length_asked_for() {
-        let mut bytes = PageBytes::new();
+        let mut bytes = PageBytes::default();
         assert!(bytes.is_empty());
         bytes.overwrite(5).unwrap().copy_from_slice(b"hello");
         assert_eq!(&*bytes, b"hello");
@@ -171,7 +159,7 @@ mod tests {
 
     #[test]
     fn grows_keeps_its_length_and_starts_at_zero() {
-        let mut buffer = PageBuffer::new();
+        let mut buffer = PageBuffer::default();
         let floats = buffer.floats(3).unwrap();
         assert_eq!(floats, [0.0; 3]);
         floats[2] = 7.5;

@@ -10,7 +10,7 @@ const SEGMENTS: [usize; 6] = [15, 6, 4, 11, 13, 6];
 
 /// The 55 colours of the Middlebury wheel, as its reference code builds
 /// them (integer steps).
-pub fn color_wheel() -> Vec<[u8; 3]> {
+pub(crate) fn color_wheel() -> Vec<[u8; 3]> {
     let [ry, yg, gc, cb, bm, mr] = SEGMENTS;
     let step = |i: usize, n: usize| (255 * i / n) as u8;
     let mut wheel = Vec::with_capacity(SEGMENTS.iter().sum());
@@ -52,7 +52,7 @@ fn color(wheel: &[[u8; 3]], u: f64, v: f64) -> [u8; 3] {
 ///
 /// # Panics
 /// If `u` and `v` differ in length.
-pub fn flow_to_rgb(u: &[f64], v: &[f64], max_radius: Option<f64>) -> Vec<u8> {
+pub(crate) fn flow_to_rgb(u: &[f64], v: &[f64], max_radius: Option<f64>) -> Vec<u8> {
     assert_eq!(u.len(), v.len(), "u and v must be planes of one size");
     let wheel = color_wheel();
     let max_rad = max_radius.unwrap_or_else(|| {

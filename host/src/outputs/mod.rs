@@ -29,8 +29,8 @@ use std::sync::{Arc, Mutex};
 use npyz::WriterBuilder;
 
 use crate::engine::Image;
-pub use crate::io::image_file::{JpegSubsampling, PngCompression};
 use crate::engine::page_buffer::ByteBuffer;
+pub use crate::io::image_file::{JpegSubsampling, PngCompression};
 use crate::settings::choices;
 use crate::{HostError, io::atomic, io::image_file};
 use background::Stage;
