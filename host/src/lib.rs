@@ -1,18 +1,30 @@
-//! Host side of ReynoldsFlow: the float64 reference of the SPEC
-//! ([`reference`](mod@reference)), the fixed-point core run over whole frames
-//! ([`engine`]), frames, video, image and `.npy` I/O, the one
-//! [`Settings`](settings::Settings) every front end maps its names onto,
-//! the pipeline and datasets. The `reynoldsflow` command line
-//! (`reynoldsflow-cli`) and the evaluation (`reynoldsflow-eval`) are crates
-//! of their own over this one.
+//! The library every front end of ReynoldsFlow uses (the `reynoldsflow`
+//! command line, the GStreamer element, the ROS 2 node, Python, the
+//! evaluation): the fixed-point core run over whole frames, frames and
+//! video in, files out, and datasets. Where to start:
+//!
+//! | you have | you want | start at |
+//! |---|---|---|
+//! | two frames | one pair's image, fields or cues | [`engine::PairEngine`] (from [`settings::Settings`]) |
+//! | frames one by one (a stream) | pairs, with the first-frame policy and restarts | [`pair_stream::PairStream`] over a `PairEngine` |
+//! | a video, a frame folder, Y4M or raw input | outputs in frame order, on every core | [`sequence::open`] → [`pipeline::process`] |
+//! | a tree of videos and folders | a dataset, resumable item by item | [`dataset`] |
+//! | two frames, in float64 | the SPEC's reference, the tests' oracle | [`reference`](mod@reference) |
+//!
+//! Every operation is given what bounds it: its [`settings::Settings`]
+//! (checked once; a bad value is a [`HostError::Setting`] naming the
+//! setting, which each front end renders as its own flag, property or
+//! keyword), the [`limits::Limits`] of the frames it may read, and, where
+//! it can be stopped, a [`stop::Stop`]. Files: [`io`] (images, `.npy`,
+//! atomic writes) and [`outputs`] (what a run writes).
 //!
 //! ```
-//! use reynoldsflow_host::{Gray, reference::{self, FloatParams, FloatScaling}};
+//! use reynoldsflow_host::{Gray, engine::PairEngine, settings::Settings};
 //! # fn main() -> Result<(), reynoldsflow_host::HostError> {
 //! let prev = Gray::new(8, 6, (0..48).map(|i| (i * 37 % 251) as u8).collect())?;
 //! let next = Gray::new(8, 6, (0..48).map(|i| (i * 41 % 251) as u8).collect())?;
-//! let flow = reference::compute(&prev, &next, &FloatParams::default())?;
-//! let rgb = reference::representation(&flow, &prev, FloatScaling::PerFrameMinMax);
+//! let mut engine = PairEngine::new(&Settings::default())?;
+//! let rgb = engine.image_vec(&prev, &next)?; // [|v_d|, |v_c|, fⁿ] per pixel
 //! assert_eq!(rgb.len(), 3 * 8 * 6);
 //! # Ok(()) }
 //! ```

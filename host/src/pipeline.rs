@@ -9,7 +9,7 @@
 //! delivered), so memory stays bounded whatever the sequence's length, and
 //! the output is the same for every thread count. Each worker holds the
 //! one engine ([`PairEngine`]); the run's last pairs are spread over the
-//! run's kept pool ([`crate::engine::bands`]), so that the threads of
+//! run's kept pool (`crate::engine::bands`), so that the threads of
 //! workers with no pair left help finish them.
 //!
 //! Only what the outputs need is computed: when no output needs the fields

@@ -28,7 +28,7 @@ use crate::{Gray, HostError};
 pub(crate) const MAX_STRIP_WIDTH: usize = 1280;
 
 /// The host's default tile width for a frame `width` wide: the fewest
-/// full-height strips of at most [`MAX_STRIP_WIDTH`] columns, of equal
+/// full-height strips of at most `MAX_STRIP_WIDTH` columns, of equal
 /// width (one strip up to 1 280 columns). Every row loop then runs the
 /// strip's whole width, and the halo's 14 columns are paid once per strip:
 /// `reynoldsflow run` (640×480, one thread) counted 286 M instructions

@@ -72,8 +72,8 @@ fn rgb_of(
 }
 
 /// Run the core on `(prev, next)` with `params`, in full-height strips
-/// [`strip_width`] wide, or in `tile = (width, height)` tiles when given,
-/// the widest instructions the CPU has: [`Lane::compute`] on a fresh
+/// `strip_width` wide, or in `tile = (width, height)` tiles when given,
+/// the widest instructions the CPU has: `Lane::compute` on a fresh
 /// engine. Fails when the frames differ in size, or the core refuses the
 /// size, the parameters or the tile (empty).
 pub fn compute_fixed(

@@ -4,16 +4,16 @@
 //! [`crate::pipeline`]), the GStreamer element, the ROS 2 node, Python and
 //! the evaluation.
 //!
-//! - [`compute`]: the settings checked once ([`Compute`]); the float64
+//! - `compute`: the settings checked once ([`Compute`]); the float64
 //!   reference ([`crate::reference`]) is the oracle the fixed engine is
 //!   held to, reached from here for the float engine, not an engine of
 //!   its own.
 //! - `lane`: one thread's path (engine memory and kept planes, reused).
-//! - [`bands`]: the one tiling policy and the one way a pair is spread
+//! - `bands`: the one tiling policy and the one way a pair is spread
 //!   over threads (its tiles taken by whichever thread is free: the
 //!   caller and the engine's kept pool).
 //! - `sinks`: where a tile's rows go.
-//! - [`bytes`]: the engine pass and the min–max byte step, compiled per
+//! - `bytes`: the engine pass and the min–max byte step, compiled per
 //!   instruction set: where a new backend plugs in.
 //!
 //! On one thread a pair takes the tuned path (the magnitudes alone, no

@@ -5,7 +5,7 @@
 //! | file | with | content |
 //! |---|---|---|
 //! | `DIR/STEM.png` | (default; `--no-rep` drops it) | RGB8 image of the `--variant` ([`Variant`]) |
-//! | `DIR/hsv/STEM.png` | `--viz` | colour-wheel coding of `v_R` ([`crate::engine::viz`]) |
+//! | `DIR/hsv/STEM.png` | `--viz` | colour-wheel coding of `v_R` (`crate::engine::viz`) |
 //! | `DIR/v_c/STEM.npy`, `DIR/v_d/STEM.npy`, `DIR/v_R/STEM.npy` | `--npy` (or `--npy=v_R,…`) | float64 (or `--npy-dtype f32`/`f16`: rounded to nearest), shape `(H, W, 2)`, C order, last axis `(x, y)` in pixels (x right, y down) |
 //! | `DIR/v_R/STEM.flo` (or `v_c/`, `v_d/`) | `--flo` (or `--flo=v_c,…`) | Middlebury `.flo` ([`flo`]): `f32` `(u, v)` |
 //!
