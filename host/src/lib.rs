@@ -24,6 +24,7 @@ pub mod content_hash;
 pub mod cues;
 pub mod dataset;
 mod decoder_guard;
+pub mod driver;
 pub mod engine;
 mod error;
 pub mod flow;
