@@ -156,7 +156,7 @@ fn take_jobs<W: Work, T>(
         // for it.
         let output = catch_unwind(AssertUnwindSafe(|| work.compute(&mut state, &job)))
             .unwrap_or_else(|payload| {
-                Err(work.panicked(&job, crate::panic_message(payload.as_ref())))
+                Err(work.panicked(&job, crate::decoder_guard::panic_message(payload.as_ref())))
             });
         work.release(job);
         if msgs.send(Msg::Done(index, output)).is_err() {
