@@ -2,7 +2,7 @@
 //! each computed on one of a pool of worker threads with the worker's own
 //! state (its engine and buffers, reused job after job), outputs handed
 //! out in the order the jobs came, on the calling thread. `run` and
-//! `dataset` ([`crate::pipeline::process`]) and Python's `represent_clip`
+//! `dataset` (`pipeline::process`) and Python's `represent_clip`
 //! drive their pairs through it.
 //!
 //! At most `2 · threads` jobs are in flight (fed but not yet handed out),
@@ -13,6 +13,7 @@
 //! returning [`ControlFlow::Break`] or an error. Once stopped, no new job
 //! starts and the feeder is unblocked ([`Feed::send`] returns false).
 
+use std::any::Any;
 use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::ops::ControlFlow;
@@ -42,8 +43,8 @@ pub trait Work: Sync {
         job: &Self::Job,
     ) -> Result<Self::Output, Self::Error>;
 
-    /// The error of a job whose computation panicked with `message`.
-    fn panicked(&self, job: &Self::Job, message: String) -> Self::Error;
+    /// The error of a job whose computation panicked with `payload`.
+    fn panicked(&self, job: &Self::Job, payload: Box<dyn Any + Send>) -> Self::Error;
 
     /// A job done with (computed, failed or skipped): its buffers may go
     /// back for reuse.
@@ -155,9 +156,7 @@ fn take_jobs<W: Work, T>(
         // A panic too gives the job an output: the others must not wait
         // for it.
         let output = catch_unwind(AssertUnwindSafe(|| work.compute(&mut state, &job)))
-            .unwrap_or_else(|payload| {
-                Err(work.panicked(&job, crate::decoder_guard::panic_message(payload.as_ref())))
-            });
+            .unwrap_or_else(|payload| Err(work.panicked(&job, payload)));
         work.release(job);
         if msgs.send(Msg::Done(index, output)).is_err() {
             return;
@@ -255,8 +254,8 @@ mod tests {
             }
         }
 
-        fn panicked(&self, &i: &usize, message: String) -> String {
-            format!("job {i}: {message}")
+        fn panicked(&self, &i: &usize, payload: Box<dyn Any + Send>) -> String {
+            format!("job {i}: {}", crate::panic_message(payload.as_ref()))
         }
     }
 

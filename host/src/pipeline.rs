@@ -460,7 +460,7 @@ impl Work for Pairs<'_> {
         })
     }
 
-    fn panicked(&self, job: &Job, _: String) -> HostError {
+    fn panicked(&self, job: &Job, _: Box<dyn std::any::Any + Send>) -> HostError {
         HostError::invalid(
             format!("frame {}", job.prev.stem),
             "internal error (panic) while computing this pair",

@@ -407,8 +407,8 @@ impl Work for ClipPairs<'_> {
             .map_err(Failure::Host)
     }
 
-    fn panicked(&self, _: &usize, message: String) -> Failure {
-        Failure::Panic(message)
+    fn panicked(&self, _: &usize, payload: Box<dyn std::any::Any + Send>) -> Failure {
+        Failure::Panic(reynoldsflow_host::panic_message(payload.as_ref()))
     }
 }
 
