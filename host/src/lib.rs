@@ -34,6 +34,7 @@
 
 pub mod cues;
 pub mod dataset;
+pub mod driver;
 pub mod engine;
 mod error;
 mod flow;

@@ -2,11 +2,11 @@
 //! gives result `n`, labelled with frame `n` (SPEC §5), computed on a pool
 //! of worker threads and delivered in frame order.
 //!
-//! One reader thread pulls frames from the [`FrameSource`] and hands out
+//! The pairs go through the one ordered driver ([`crate::driver`]): its
+//! feeding thread reads frames from the [`FrameSource`] and hands out
 //! pairs; `threads` workers compute each pair and write its files (or
 //! encode its stream frame); this thread puts stream frames out in order
-//! and counts. At most `2 · threads` pairs are in flight (read but not yet
-//! delivered), so memory stays bounded whatever the sequence's length, and
+//! and counts. Memory stays bounded whatever the sequence's length, and
 //! the output is the same for every thread count. Each worker holds the
 //! one engine ([`PairEngine`]); the run's last pairs are spread over the
 //! run's kept pool (`crate::engine::bands`), so that the threads of
@@ -18,13 +18,13 @@
 //! reused from pair to pair (a `Pool`), so a warm run allocates no frame-
 //! sized memory.
 
-use std::collections::BTreeMap;
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
+use std::ops::ControlFlow;
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex};
 
 use crate::HostError;
+use crate::driver::{self, Feed, Work};
 use crate::engine::page_buffer::{ByteBuffer, PageBytes};
 use crate::engine::{Compute, Image, PairEngine};
 use crate::outputs::{DirWriter, OutputSpec, StreamFormat, y4m_frame_into, y4m_header};
@@ -134,14 +134,6 @@ impl<T> Pool<T> {
     }
 }
 
-/// The buffers every thread of a run shares: frames (the reader fills
-/// them, the last worker to use one hands it back) and stream payloads
-/// (workers fill them, the writer hands them back).
-struct Buffers {
-    frames: Pool<Frame>,
-    payloads: Pool<PageBytes>,
-}
-
 /// A pair to compute.
 struct Job {
     index: usize,
@@ -168,28 +160,13 @@ fn result_stem<'a>(prev: &'a str, next: &str, pair_names: bool) -> std::borrow::
     }
 }
 
-enum Msg {
-    Done {
-        index: usize,
-        stem: String,
-        size: (usize, usize),
-        payload: PageBytes,
-        /// The input indices of its two frames.
-        frames: (usize, usize),
-        /// Its sample, for [`Destination::Samples`].
-        sample: Option<Sample>,
-    },
-    /// A pair failed: stop at once.
-    Failed(HostError),
-    /// The input failed (or the run was interrupted): the pairs read before
-    /// still complete, then the run fails.
-    InputFailed(HostError),
-    End {
-        frames: usize,
-        last_stem: Option<String>,
-        size: Option<(usize, usize)>,
-        source_frames: Option<Vec<usize>>,
-    },
+/// What the reader found once it reached the end of the input.
+#[derive(Default)]
+struct End {
+    frames: usize,
+    last_stem: Option<String>,
+    size: Option<(usize, usize)>,
+    source_frames: Option<Vec<usize>>,
 }
 
 fn interrupted() -> HostError {
@@ -233,16 +210,7 @@ fn process_with(
     #[cfg(test)] overlap: Option<&tests::Overlap>,
 ) -> Result<Summary, HostError> {
     let threads = options.threads.max(1);
-    let in_flight = 2 * threads;
     let fps = source.frame_rate().unwrap_or((25, 1));
-    let stop = AtomicBool::new(false);
-    let (job_tx, job_rx) = mpsc::sync_channel::<Job>(threads);
-    let job_rx = Mutex::new(job_rx);
-    let (msg_tx, msg_rx) = mpsc::channel::<Msg>();
-    let (token_tx, token_rx) = mpsc::sync_channel::<()>(in_flight);
-    for _ in 0..in_flight {
-        token_tx.send(()).expect("the receiver is alive");
-    }
     let (dir, mut stream, mut samples) = match dest {
         Destination::Dir(d) => (Some(d), None, None),
         Destination::Stream {
@@ -261,72 +229,80 @@ fn process_with(
         (None, None, Some(_)) => true,
         (None, None, None) => unreachable!("a destination is a folder, a stream or samples"),
     };
-    let buffers = Buffers {
+    let pairs = Pairs {
+        compute,
+        threads,
+        // The threads that help finish the run's last pairs (none on one).
+        pool: match threads {
+            1 => None,
+            n => Some(Arc::new(crate::workers::kept_pool(
+                n - 1,
+                "reynoldsflow-help",
+            )?)),
+        },
+        needs_fields,
+        dir,
+        stream: stream_spec,
+        samples: sample_spec,
+        desk: LastPairs::new(threads),
         frames: Pool::new(),
         payloads: Pool::new(),
+        #[cfg(test)]
+        overlap,
     };
-    let buffers = &buffers;
-    let desk = &LastPairs::new(threads);
-    // The threads that help finish the run's last pairs (none on one).
-    let pool = match threads {
-        1 => None,
-        n => Some(Arc::new(crate::workers::kept_pool(
-            n - 1,
-            "reynoldsflow-help",
-        )?)),
+    let mut out = Out {
+        payloads: &pairs.payloads,
+        dir,
+        stream: stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
+        samples: samples.as_mut().map(|(_, sink)| &mut **sink),
+        pair_names: options.pair_names,
+        fps,
+        keep_count: options.keep_count,
+        header_written: false,
+        delivered: 0,
+        last: None,
     };
-
-    let result = std::thread::scope(|scope| {
-        let reader_tx = msg_tx.clone();
-        let stop = &stop;
-        let reader_options = options.clone();
-        scope.spawn(move || {
-            let links = ReaderLinks {
-                jobs: job_tx,
-                tokens: token_rx,
-                msgs: reader_tx,
-            };
-            read_pairs(source, reader_options, links, stop, &buffers.frames, desk)
-        });
-        for _ in 0..threads {
-            let (job_rx, msg_tx) = (&job_rx, msg_tx.clone());
-            let worker = Worker {
-                needs_fields,
-                dir,
-                stream: stream_spec,
-                samples: sample_spec,
-                engine: PairEngine::with_pool(
-                    compute.clone(),
-                    Image::default(),
-                    pool.clone(),
-                    threads - 1,
-                ),
-                rgb: Vec::new(),
-                desk,
-                #[cfg(test)]
-                overlap,
-            };
-            scope.spawn(move || worker.take_jobs(job_rx, &msg_tx, stop, buffers));
+    let ran = driver::in_order(
+        &pairs,
+        threads,
+        |feed| read_pairs(source, &options, feed, &pairs),
+        |delivery| {
+            let next = out.deliver(delivery)?;
+            if next.is_continue() {
+                on_output();
+            }
+            Ok(next)
+        },
+    );
+    let result = (|| {
+        let ran = ran?;
+        if options.stop.is_stopped() {
+            return Err(interrupted());
         }
-        drop(msg_tx);
-        let collector = Collector {
-            tokens: Some(token_tx),
-            stop,
-            interrupt: &options.stop,
-            payloads: &buffers.payloads,
-            dir,
-            stream: stream.as_mut().map(|(_, format, w)| (*format, &mut **w)),
-            samples: samples.as_mut().map(|(_, sink)| &mut **sink),
-            pair_names: options.pair_names,
-            fps,
-            keep_count: options.keep_count,
-            delivered: 0,
-            header_written: false,
-            closed: false,
-            error: None,
+        let Some(end) = ran else {
+            return Ok(Summary {
+                outputs: out.delivered,
+                results: out.delivered,
+                stream_closed: true,
+                ..Summary::default()
+            });
         };
-        collector.collect(msg_rx, on_output)
-    });
+        let mut summary = Summary {
+            frames: end.frames,
+            results: out.delivered,
+            outputs: out.delivered,
+            size: end.size,
+            stream_closed: false,
+            source_frames: end.source_frames,
+        };
+        if let Some(to) = end.last_stem
+            && out.repeat_last(&to)?
+        {
+            on_output();
+            summary.outputs += 1;
+        }
+        Ok(summary)
+    })();
     // Files still being written in the background are complete before
     // this returns, whatever happened (the run's own error comes first).
     let flushed = dir.map_or(Ok(()), DirWriter::flush);
@@ -366,80 +342,64 @@ impl LastPairs {
     }
 }
 
-/// The reader's channels: pairs out, tokens in, messages to the collector.
-struct ReaderLinks {
-    jobs: SyncSender<Job>,
-    tokens: Receiver<()>,
-    msgs: Sender<Msg>,
-}
-
-/// The reader: frames in, pairs out, one token per pair in flight; tells
-/// `desk` where the input ends.
+/// The reader: frames in, pairs out to `feed` (which waits for room);
+/// tells `pairs.desk` where the input ends. Stopped early, what it returns
+/// is not used.
 fn read_pairs(
     source: &mut dyn FrameSource,
-    options: Options,
-    links: ReaderLinks,
-    stop: &AtomicBool,
-    pool: &Pool<Frame>,
-    desk: &LastPairs,
-) {
-    let ReaderLinks { jobs, tokens, msgs } = links;
-    let max_frames = options.max_frames;
+    options: &Options,
+    feed: &Feed<'_, Job>,
+    pairs: &Pairs<'_>,
+) -> Result<End, HostError> {
     let mut prev: Option<Arc<Frame>> = None;
     let mut frames = 0;
     let mut source_frames = options.record_frames.then(Vec::new);
     loop {
-        if stop.load(Ordering::SeqCst) {
-            return;
+        if feed.stopped() {
+            return Ok(End::default());
         }
         if options.stop.is_stopped() {
-            let _ = msgs.send(Msg::InputFailed(interrupted()));
-            return;
+            return Err(interrupted());
         }
-        if max_frames.is_some_and(|m| frames >= m) {
+        if options.max_frames.is_some_and(|m| frames >= m) {
             break;
         }
-        let mut frame = pool.take().unwrap_or_else(Frame::empty);
-        let frame = match source.next_frame_into(&mut frame) {
-            Ok(true) => Arc::new(frame),
-            Ok(false) => break,
-            Err(e) => {
-                let _ = msgs.send(Msg::InputFailed(e));
-                return;
-            }
+        let mut frame = pairs.frames.take().unwrap_or_else(Frame::empty);
+        let frame = match source.next_frame_into(&mut frame)? {
+            true => Arc::new(frame),
+            false => break,
         };
         frames += 1;
         if let Some(used) = &mut source_frames {
             used.push(frame.index);
         }
         if let Some(prev) = prev.replace(Arc::clone(&frame)) {
-            // Wait for room; a closed token channel means the run is stopping.
-            if tokens.recv().is_err() {
-                return;
-            }
             let job = Job {
                 index: frames - 2,
                 prev,
                 next: frame,
                 pair_names: options.pair_names,
             };
-            if jobs.send(job).is_err() {
-                return;
+            if !feed.send(job) {
+                return Ok(End::default());
             }
         }
     }
-    desk.end_input(frames);
-    let _ = msgs.send(Msg::End {
+    pairs.desk.end_input(frames);
+    Ok(End {
         frames,
         last_stem: prev.as_ref().map(|f| f.stem.clone()),
         size: prev.as_ref().map(|f| f.gray.size()),
         source_frames,
-    });
+    })
 }
 
-/// A worker: what it computes, where results go, and its own buffers,
-/// reused for every pair it takes.
-struct Worker<'a> {
+/// What the workers compute and where results go, shared by them all.
+struct Pairs<'a> {
+    compute: &'a Compute,
+    threads: usize,
+    /// The threads that help finish the run's last pairs.
+    pool: Option<Arc<rayon::ThreadPool>>,
     /// Some output needs the fields; otherwise only the representation's
     /// bytes are computed.
     needs_fields: bool,
@@ -447,91 +407,90 @@ struct Worker<'a> {
     stream: Option<(&'a OutputSpec, StreamFormat)>,
     /// Results are samples of this spec.
     samples: Option<&'a OutputSpec>,
-    engine: PairEngine,
-    /// The `--variant` image of the pair (when it is not the payload itself).
-    rgb: Vec<u8>,
     /// Which pairs are the run's last.
-    desk: &'a LastPairs,
+    desk: LastPairs,
+    /// Frames: the reader fills them, the last worker to use one hands it
+    /// back.
+    frames: Pool<Frame>,
+    /// Stream payloads: workers fill them, the collector hands them back.
+    payloads: Pool<PageBytes>,
     /// Where the pipeline's tests see whether two workers compute at once.
     #[cfg(test)]
     overlap: Option<&'a tests::Overlap>,
 }
 
-impl Worker<'_> {
-    /// Take pairs until the reader is done: compute each (unless the run
-    /// is stopping), hand its frames back, report the result.
-    fn take_jobs(
-        mut self,
-        jobs: &Mutex<Receiver<Job>>,
-        msgs: &Sender<Msg>,
-        stop: &AtomicBool,
-        buffers: &Buffers,
-    ) {
-        loop {
-            // The lock is held only while waiting for the next job: a guard
-            // in a `while let` condition would live through the whole body
-            // and keep every other worker waiting.
-            let next = jobs.lock().expect("no worker panics holding it").recv();
-            let Ok(job) = next else {
-                return;
-            };
-            if stop.load(Ordering::SeqCst) {
-                continue;
-            }
-            #[cfg(test)]
-            let _inside = self.overlap.map(|o| o.enter());
-            let msg = self.job_message(&job, &buffers.payloads);
-            // The last of the two jobs (and the reader) to use a frame hands it back.
-            for frame in [job.prev, job.next] {
-                if let Some(frame) = Arc::into_inner(frame) {
-                    buffers.frames.put(frame);
-                }
-            }
-            if msgs.send(msg).is_err() {
-                return;
-            }
+/// A worker's own: its engine and the `--variant` image of the pair (when
+/// it is not the payload itself), reused for every pair it takes.
+struct Lane {
+    engine: PairEngine,
+    rgb: Vec<u8>,
+}
+
+impl Work for Pairs<'_> {
+    type Job = Job;
+    type Output = Delivery;
+    type Error = HostError;
+    type State = Lane;
+
+    fn state(&self) -> Lane {
+        Lane {
+            engine: PairEngine::with_pool(
+                self.compute.clone(),
+                Image::default(),
+                self.pool.clone(),
+                self.threads - 1,
+            ),
+            rgb: Vec::new(),
         }
     }
 
-    /// One pair's result, a panic included: it must not leave the others
-    /// waiting for this pair. Its payload is drawn from `payloads` only when
-    /// its bytes are written ([`PooledBytes`]).
-    fn job_message(&mut self, job: &Job, payloads: &Pool<PageBytes>) -> Msg {
-        let mut payload = PooledBytes::new(payloads);
-        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            self.work(job, &mut payload)
-        }))
-        .map(|done| done.map(|sample| (payload.into_inner(), sample)))
-        .unwrap_or_else(|_| {
-            Err(HostError::invalid(
-                format!("frame {}", job.prev.stem),
-                "internal error (panic) while computing this pair",
-            ))
-        });
-        match result {
-            Ok((payload, sample)) => Msg::Done {
-                index: job.index,
-                stem: job.stem().into_owned(),
-                size: job.prev.gray.size(),
-                payload,
-                frames: (job.prev.index, job.next.index),
-                sample,
-            },
-            Err(e) => Msg::Failed(e),
-        }
+    /// One pair's result. Its payload is drawn from the pool only when its
+    /// bytes are written ([`PooledBytes`]).
+    fn compute(&self, lane: &mut Lane, job: &Job) -> Result<Delivery, HostError> {
+        #[cfg(test)]
+        let _inside = self.overlap.map(|o| o.enter());
+        let mut payload = PooledBytes::new(&self.payloads);
+        let sample = self.work(lane, job, &mut payload)?;
+        Ok(Delivery {
+            stem: job.stem().into_owned(),
+            size: job.prev.gray.size(),
+            payload: payload.into_inner(),
+            frames: (job.prev.index, job.next.index),
+            sample,
+        })
     }
 
+    fn panicked(&self, job: &Job, _: Box<dyn std::any::Any + Send>) -> HostError {
+        HostError::invalid(
+            format!("frame {}", job.prev.stem),
+            "internal error (panic) while computing this pair",
+        )
+    }
+
+    /// The last of the two jobs (and the reader) to use a frame hands it
+    /// back.
+    fn release(&self, job: Job) {
+        for frame in [job.prev, job.next] {
+            if let Some(frame) = Arc::into_inner(frame) {
+                self.frames.put(frame);
+            }
+        }
+    }
+}
+
+impl Pairs<'_> {
     /// Compute one pair, then write its files, encode its stream frame
     /// into `payload`, or make its sample.
     fn work(
-        &mut self,
+        &self,
+        lane: &mut Lane,
         job: &Job,
         payload: &mut PooledBytes<'_>,
     ) -> Result<Option<Sample>, HostError> {
         let (prev, next) = (&job.prev.gray, &job.next.gray);
         let stem = job.stem();
         if self.needs_fields {
-            let fields = self.engine.fields(prev, next)?;
+            let fields = lane.engine.fields(prev, next)?;
             if let Some(dir) = self.dir {
                 // A folder is the run's one destination: the fields go to it.
                 dir.write(&stem, fields)?;
@@ -560,17 +519,16 @@ impl Worker<'_> {
             || self.stream.expect("a folder or a stream").0,
             DirWriter::spec,
         );
+        let last = self.desk.shares(job.index);
         let image: &mut [u8] = match self.stream {
             Some((_, StreamFormat::Rgb24)) => {
-                let last = self.desk.shares(job.index);
-                self.engine.representation(prev, next, payload, last)?;
+                lane.engine.representation(prev, next, payload, last)?;
                 payload.bytes()
             }
             _ => {
-                let last = self.desk.shares(job.index);
-                self.engine
-                    .representation(prev, next, &mut self.rgb, last)?;
-                &mut self.rgb
+                lane.engine
+                    .representation(prev, next, &mut lane.rgb, last)?;
+                &mut lane.rgb
             }
         };
         spec.arrange(image);
@@ -578,7 +536,7 @@ impl Worker<'_> {
             dir.write_image(&stem, prev.width, prev.height, image)?;
         }
         if let Some((_, StreamFormat::Y4m)) = self.stream {
-            y4m_frame_into(&self.rgb, payload)?;
+            y4m_frame_into(&lane.rgb, payload)?;
         }
         Ok(None)
     }
@@ -630,14 +588,9 @@ struct Delivery {
     sample: Option<Sample>,
 }
 
-/// This thread's part: results in frame order, the stream, the count.
-struct Collector<'a, 'w, 'o> {
-    /// Hands a token back to the reader per delivered result; dropped to
-    /// unblock it when the run stops.
-    tokens: Option<SyncSender<()>>,
-    stop: &'a AtomicBool,
-    /// The run's stop token ([`Options::stop`]).
-    interrupt: &'a Stop,
+/// This thread's part: results in frame order to the stream or the
+/// sample sink, and the count.
+struct Out<'a, 'w, 'o> {
     payloads: &'a Pool<PageBytes>,
     dir: Option<&'a DirWriter>,
     stream: Option<(StreamFormat, &'w mut (dyn Write + Send + 'o))>,
@@ -646,128 +599,24 @@ struct Collector<'a, 'w, 'o> {
     pair_names: bool,
     fps: (u32, u32),
     keep_count: bool,
-    /// Results delivered so far: the index of the next one.
-    delivered: usize,
     header_written: bool,
-    /// The stream's reader closed it.
-    closed: bool,
-    /// The first failure of a pair or of the stream.
-    error: Option<HostError>,
+    /// Results delivered so far.
+    delivered: usize,
+    /// The last result, kept only to be repeated (`--keep-count`).
+    last: Option<Delivery>,
 }
 
 fn stdout_error(e: std::io::Error) -> HostError {
     HostError::io("stdout", e)
 }
 
-impl Collector<'_, '_, '_> {
-    /// Deliver every result in order as it arrives, then sum up.
-    fn collect(
-        mut self,
-        msgs: Receiver<Msg>,
-        on_output: &mut dyn FnMut(),
-    ) -> Result<Summary, HostError> {
-        let mut pending: BTreeMap<usize, Delivery> = BTreeMap::new();
-        let mut input_error: Option<HostError> = None;
-        let mut end = None;
-        let mut last: Option<Delivery> = None;
-        for msg in msgs {
-            match msg {
-                Msg::Done {
-                    index,
-                    stem,
-                    size,
-                    payload,
-                    frames,
-                    sample,
-                } => {
-                    let delivery = Delivery {
-                        stem,
-                        size,
-                        payload,
-                        frames,
-                        sample,
-                    };
-                    pending.insert(index, delivery);
-                }
-                Msg::Failed(e) => self.fail(Some(e)),
-                Msg::InputFailed(e) => input_error = Some(e),
-                Msg::End {
-                    frames,
-                    last_stem,
-                    size,
-                    source_frames,
-                } => end = Some((frames, last_stem, size, source_frames)),
-            }
-            while self.error.is_none() && !self.closed {
-                let Some(delivery) = pending.remove(&self.delivered) else {
-                    break;
-                };
-                if !self.deliver(&delivery) {
-                    break;
-                }
-                on_output();
-                // The last result is kept only to be repeated (`--keep-count`);
-                // otherwise its buffer goes straight back to the workers.
-                if !self.keep_count {
-                    self.payloads.put(delivery.payload);
-                } else if let Some(used) = last.replace(delivery) {
-                    self.payloads.put(used.payload);
-                }
-            }
-        }
-        if let Some(e) = self.error.take().or(input_error) {
-            return Err(e);
-        }
-        if self.interrupt.is_stopped() {
-            return Err(interrupted());
-        }
-        if self.closed {
-            return Ok(Summary {
-                outputs: self.delivered,
-                results: self.delivered,
-                stream_closed: true,
-                ..Summary::default()
-            });
-        }
-        let (frames, last_stem, size, source_frames) =
-            end.expect("the reader ends with End or Failed");
-        let mut summary = Summary {
-            frames,
-            results: self.delivered,
-            outputs: self.delivered,
-            size,
-            stream_closed: false,
-            source_frames,
-        };
-        if self.keep_count
-            && let (Some(from), Some(to)) = (last, last_stem)
-        {
-            let to = result_stem(&to, &to, self.pair_names);
-            self.repeat_last(&from, &to)?;
-            on_output();
-            summary.outputs += 1;
-        }
-        Ok(summary)
-    }
-
-    /// Stop the run: no new pair starts, the reader is unblocked; `error`
-    /// (if any) is kept unless one came first.
-    fn fail(&mut self, error: Option<HostError>) {
-        self.stop.store(true, Ordering::SeqCst);
-        self.tokens = None;
-        if let Some(e) = error {
-            self.error.get_or_insert(e);
-        }
-    }
-
+impl Out<'_, '_, '_> {
     /// Put the next result out (on the stream or as a sample, if any);
-    /// false when that failed or the stream closed, which stops the run.
-    fn deliver(&mut self, delivery: &Delivery) -> bool {
-        if let (Some(sink), Some(sample)) = (self.samples.as_mut(), &delivery.sample)
-            && let Err(e) = sink.sample(&delivery.stem, delivery.frames, sample)
-        {
-            self.fail(Some(e));
-            return false;
+    /// `Break` when the stream's reader closed it (broken pipe), which
+    /// stops the run without error.
+    fn deliver(&mut self, delivery: Delivery) -> Result<ControlFlow<()>, HostError> {
+        if let (Some(sink), Some(sample)) = (self.samples.as_mut(), &delivery.sample) {
+            sink.sample(&delivery.stem, delivery.frames, sample)?;
         }
         if let Some((format, w)) = self.stream.as_mut() {
             let written = (|| {
@@ -779,26 +628,32 @@ impl Collector<'_, '_, '_> {
                 w.write_all(&delivery.payload)?;
                 w.flush()
             })();
-            if let Err(e) = written {
-                if e.kind() == std::io::ErrorKind::BrokenPipe {
-                    self.closed = true;
-                    self.fail(None);
-                } else {
-                    self.fail(Some(stdout_error(e)));
+            match written {
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                    return Ok(ControlFlow::Break(()));
                 }
-                return false;
+                Err(e) => return Err(stdout_error(e)),
+                Ok(()) => {}
             }
         }
         self.delivered += 1;
-        if let Some(t) = &self.tokens {
-            let _ = t.send(());
+        // Unless it is kept to be repeated, its buffer goes straight back
+        // to the workers.
+        if !self.keep_count {
+            self.payloads.put(delivery.payload);
+        } else if let Some(used) = self.last.replace(delivery) {
+            self.payloads.put(used.payload);
         }
-        true
+        Ok(ControlFlow::Continue(()))
     }
 
     /// `--keep-count`: the last result once more, labelled with the last
-    /// frame (`to`).
-    fn repeat_last(&mut self, from: &Delivery, to: &str) -> Result<(), HostError> {
+    /// frame (`to`); whether there was one to repeat.
+    fn repeat_last(&mut self, to: &str) -> Result<bool, HostError> {
+        let Some(from) = self.last.take().filter(|_| self.keep_count) else {
+            return Ok(false);
+        };
+        let to = &*result_stem(to, to, self.pair_names);
         if let Some(dir) = self.dir {
             dir.repeat(&from.stem, to)?;
         }
@@ -818,7 +673,7 @@ impl Collector<'_, '_, '_> {
                 .and_then(|()| w.flush())
                 .map_err(stdout_error)?;
         }
-        Ok(())
+        Ok(true)
     }
 }
 

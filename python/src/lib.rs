@@ -8,6 +8,7 @@
 //! dimensions, `ValueError` for a wrong shape or value), releases the GIL
 //! while computing, and turns any panic into a `RuntimeError`.
 
+use std::ops::ControlFlow;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -18,6 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use reynoldsflow_host::dataset::{self, Record, Shard};
+use reynoldsflow_host::driver::{self, Work};
 use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::limits::{DEFAULT_MAX_PIXELS, Limits};
 use reynoldsflow_host::outputs::flo;
@@ -25,7 +27,7 @@ use reynoldsflow_host::pair_stream::{self, PairStream};
 use reynoldsflow_host::sequence::sampled::{self, FramePlan};
 use reynoldsflow_host::sequence::{Frame, FrameSource};
 use reynoldsflow_host::settings::{FirstFrame, Setting};
-use reynoldsflow_host::{Gray, HostError, io::atomic, workers};
+use reynoldsflow_host::{Gray, HostError, io::atomic};
 
 mod errors;
 mod frames;
@@ -311,37 +313,42 @@ fn represent_clip<'py>(
     let rgb = output.bytes();
     let scores = py
         .detach(|| {
-            guarded(|| {
-                let grays = picked
+            let grays = guarded(|| {
+                picked
                     .iter()
                     .map(|&i| sized(gray(view.index_axis(Axis(0), i))?, &plan))
-                    .collect::<Result<Vec<Gray>, HostError>>()?;
-                let frame_bytes = 3 * h * w;
-                let (images, kept) = rgb.split_at_mut(results * frame_bytes);
-                // Each pair's bytes, taken by the one thread that computes it.
-                let slots: Vec<Mutex<&mut [u8]>> = images
+                    .collect::<Result<Vec<Gray>, HostError>>()
+            })?;
+            let frame_bytes = 3 * h * w;
+            let (images, kept) = rgb.split_at_mut(results * frame_bytes);
+            let pairs = ClipPairs {
+                settings: &settings,
+                grays: &grays,
+                layout,
+                score: return_scores,
+                slots: images
                     .chunks_exact_mut(frame_bytes)
                     .map(Mutex::new)
-                    .collect();
-                let scores = workers::map_indices(
-                    threads,
-                    results,
-                    || None,
-                    |worker, i| {
-                        let worker = PairWorker::of(worker, &settings)?;
-                        let pair = (&grays[i], &grays[i + 1]);
-                        let mut slot = slots[i].lock().expect("one thread takes each pair");
-                        worker.pair_into(pair, layout, return_scores, &mut slot)
-                    },
-                )
-                .into_iter()
-                .collect::<Result<Vec<f64>, HostError>>()?;
-                drop(slots);
-                if keep_count {
-                    kept.copy_from_slice(&images[(results - 1) * frame_bytes..]);
-                }
-                Ok(scores)
-            })
+                    .collect(),
+            };
+            let mut scores = Vec::with_capacity(results);
+            driver::in_order(
+                &pairs,
+                threads.min(results),
+                |feed| {
+                    (0..results).all(|i| feed.send(i));
+                    Ok(())
+                },
+                |score| {
+                    scores.push(score);
+                    Ok(ControlFlow::Continue(()))
+                },
+            )?;
+            drop(pairs);
+            if keep_count {
+                kept.copy_from_slice(&images[(results - 1) * frame_bytes..]);
+            }
+            Ok(scores)
         })
         .map_err(Failure::into_pyerr)?;
     let images = output.object;
@@ -366,6 +373,42 @@ fn sized(frame: Gray, plan: &FramePlan) -> Result<Gray, HostError> {
             Ok(out)
         }
         _ => Ok(frame),
+    }
+}
+
+/// `represent_clip`'s pairs: pair `i` is frames `i` and `i + 1`, its
+/// image written into `slots[i]` (taken by the one worker that computes
+/// it), its motion score the output.
+struct ClipPairs<'a> {
+    settings: &'a CallSettings,
+    grays: &'a [Gray],
+    layout: Layout,
+    score: bool,
+    slots: Vec<Mutex<&'a mut [u8]>>,
+}
+
+impl Work for ClipPairs<'_> {
+    type Job = usize;
+    type Output = f64;
+    type Error = Failure;
+    /// Made on the worker's first pair.
+    type State = Option<PairWorker>;
+
+    fn state(&self) -> Option<PairWorker> {
+        None
+    }
+
+    fn compute(&self, worker: &mut Option<PairWorker>, &i: &usize) -> Result<f64, Failure> {
+        let worker = PairWorker::of(worker, self.settings).map_err(Failure::Host)?;
+        let pair = (&self.grays[i], &self.grays[i + 1]);
+        let mut slot = self.slots[i].lock().expect("one thread takes each pair");
+        worker
+            .pair_into(pair, self.layout, self.score, &mut slot)
+            .map_err(Failure::Host)
+    }
+
+    fn panicked(&self, _: &usize, payload: Box<dyn std::any::Any + Send>) -> Failure {
+        Failure::Panic(reynoldsflow_host::panic_message(payload.as_ref()))
     }
 }
 
