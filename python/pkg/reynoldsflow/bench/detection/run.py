@@ -46,9 +46,9 @@ CALIBRATION_SEEDS = (100, 101, 102, 103)
 GRAY_RANGE = (0.2, 0.7)
 # The inputs that matter most, sized to fit the full run in 40 minutes of this
 # 2-core machine (docs/evaluation.md: what was left out and why).
-DEFAULT_INPUTS = ("gray", "diff", "farneback", "dis", "rf", "rf dc0")
+DEFAULT_INPUTS = ("gray", "diff", "farneback", "dis", "rf")
 REFERENCE = "rf"
-DEFAULT = dict(seeds=5, train=3000, val=400, test=1000, max_steps=2500, every=50, bootstrap=1000)
+DEFAULT = dict(seeds=5, train=3000, val=400, test=1000, max_steps=3000, every=50, bootstrap=1000)
 QUICK = dict(seeds=1, train=16, val=8, test=12, max_steps=20, every=10, bootstrap=50)
 HELP = dict(seeds="seeds (each: its own patches, crops and initial weights)", train="training patches per seed",
             val="validation patches per seed (early stopping)", test="test patches per seed",
@@ -86,8 +86,6 @@ def _job(family, seed, names, contrasts, a_sizes, factors, videos):
     (rows, curves, {input: Records})."""
     import torch
 
-    from ..downstream import detector
-
     torch.set_num_threads(1)
     n_train, n_val, n_test, max_steps, every = a_sizes
     pools = {part: patches.make(family, seed, part, n, names, SIZES, contrasts, factors, videos)
@@ -95,21 +93,16 @@ def _job(family, seed, names, contrasts, a_sizes, factors, videos):
     tr, va, te = pools["train"], pools["val"], pools["test"]
     rows, curves, recs = [], [], {}
     for name in names:
-        model, norm, curve = train.fit(tr.x[name], tr.centers, va.x[name], va.centers, seed, max_steps, every)
-        heat = detector.heatmaps(model, norm, te.x[name])
-        found = metrics.peaks(heat)
-        keep = np.isfinite(found[..., 2])
-        frame = np.nonzero(keep)[0]
-        r = metrics.records(frame, found[keep][:, 2], found[keep][:, :2], te.centers, te.diameters,
-                            np.arange(len(te.centers)))
-        recs[name] = r
+        model, norm, curve = train.fit(tr.x[name], tr.centers, va.x[name], va.centers, va.diameters, seed,
+                                       max_steps, every)
+        recs[name] = r = train.detect(model, norm, te.x[name], te.centers, te.diameters)
         s = metrics.summary(r)
         rows.append(dict(family=family, input=name, seed=seed, ap=s["ap"], located_3px=s["located_3px"],
                          best_step=curve.best_step, stopped_at=curve.stopped_at,
-                         val_loss_best=min(curve.val_loss), train_seconds=round(curve.seconds, 1),
+                         val_ap_best=max(curve.val_ap), train_seconds=round(curve.seconds, 1),
                          contrast=f"{contrasts[0]:g}-{contrasts[1]:g}"))
-        curves += [dict(family=family, input=name, seed=seed, step=st, train_loss=tl, val_loss=vl)
-                   for st, tl, vl in zip(curve.steps, curve.train_loss, curve.val_loss)]
+        curves += [dict(family=family, input=name, seed=seed, step=st, train_loss=tl, val_loss=vl, val_ap=va_)
+                   for st, tl, vl, va_ in zip(curve.steps, curve.train_loss, curve.val_loss, curve.val_ap)]
     return rows, curves, recs
 
 
@@ -164,7 +157,7 @@ def _calibrate(a, factors, videos, start) -> int:
              f"from CALIBRATED towards harder (AP > {GRAY_RANGE[1]}) or easier (AP < {GRAY_RANGE[0]}) rungs of "
              f"the ladder {', '.join(f'{lo:g}-{hi:g}' for lo, hi in LADDER)}; sizes: {a.train} training, "
              f"{a.val} validation and {a.test} test patches per seed; training as the full run's (validation every "
-             f"{a.every} steps, stop after {train.PATIENCE} without a 1 % fall, at most {a.max_steps} steps).", "",
+             f"{a.every} steps; {train.REGIME}; at most {a.max_steps} steps).", "",
              "| family | contrast | gray AP (mean over seeds) | per seed | best step / stopped at (per seed) |",
              "|---|---|---:|---|---|"]
     chosen, rows = {}, {f: [] for f in a.families}
@@ -268,7 +261,7 @@ def main(argv=None) -> int:
           f"{SIZES[0]:g}-{SIZES[1]:g} px; contrast (calibrated on gray, --calibrate) "
           + ", ".join(f"{f} {CALIBRATED[f][0]:g}-{CALIBRATED[f][1]:g}" for f in fams)
           + f" gray levels; training: crops of {train.CROP} px, {train.BATCH} per step, validation every "
-          f"{a.every} steps, stop after {train.PATIENCE} without a 1 % fall, at most {a.max_steps} steps; "
+          f"{a.every} steps; {train.REGIME}; at most {a.max_steps} steps; "
           f"bootstrap {a.bootstrap}; workers {a.workers}; cpus {os.cpu_count()}; load average (1, 5, 15 min) at "
           "start " + "{:.1f}, {:.1f}, {:.1f}".format(*a.load_start) + ", at end "
           + "{:.1f}, {:.1f}, {:.1f}".format(*os.getloadavg()) + ".", "",
@@ -276,7 +269,7 @@ def main(argv=None) -> int:
           "", "Median half-width of the intervals: " + ", ".join(f"{f} {half[f]:.3f} (AP), {half_d[f]:.3f} "
                                                                  f"(paired differences)" for f in fams) + ".",
           "", "## Paired differences (same seeds and patches; beats / loses: the interval excludes 0)", ""] + paired
-    md += ["", "## Training: the step of the lowest validation loss and the step it stopped at", ""] + steps
+    md += ["", "## Training: the step of the best validation AP and the step it stopped at", ""] + steps
     a.out.mkdir(parents=True, exist_ok=True)
     atomic_write(a.out / "results.csv", _rows_csv(rows))
     atomic_write(a.out / "curves.csv", _rows_csv(curves))
@@ -314,10 +307,10 @@ def _plot(path, fams, names, intervals, curves) -> None:
         ax = axes[1][k]
         for n in names:
             cs = [c for c in curves if c["family"] == f and c["input"] == n and c["seed"] == 0]
-            ax.plot([c["step"] for c in cs], [c["val_loss"] for c in cs], label=n,
+            ax.plot([c["step"] for c in cs], [c["val_ap"] for c in cs], label=n,
                     lw=2 if n == REFERENCE else 1)
         ax.set_xlabel("step")
-        ax.set_ylabel("validation loss (seed 0)")
+        ax.set_ylabel("validation AP (3 px), seed 0")
         ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
     buf = io.BytesIO()
