@@ -46,7 +46,7 @@ CALIBRATION_SEEDS = (100, 101, 102, 103)
 GRAY_RANGE = (0.2, 0.7)
 # The inputs that matter most, sized to fit the full run in 40 minutes of this
 # 2-core machine (docs/evaluation.md: what was left out and why).
-DEFAULT_INPUTS = ("gray", "diff", "farneback", "dis", "rf")
+DEFAULT_INPUTS = ("gray", "diff", "farneback", "rf")
 REFERENCE = "rf"
 DEFAULT = dict(seeds=5, train=3000, val=400, test=1000, max_steps=3000, every=50, bootstrap=1000)
 QUICK = dict(seeds=1, train=16, val=8, test=12, max_steps=20, every=10, bootstrap=50)
