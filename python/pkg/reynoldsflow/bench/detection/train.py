@@ -5,13 +5,15 @@ benchmark's (``downstream.detector``). Each step draws BATCH crops of CROP
 px from the training patches (POSITIVE of them around a drone), the same
 crops in the same order for every input of a seed; every `every` steps
 (EVERY by default) the validation patches' mean focal loss and AP (3 px)
-are measured. When the validation AP has not risen above its best by
-MIN_GAIN for PATIENCE measurements, training goes back to the best weights
-and multiplies the learning rate by FACTOR, at most DROPS times; at the
+are measured. When, after the first WARMUP steps, the validation AP has
+not risen above its best by MIN_GAIN for PATIENCE measurements, training
+goes back to the best weights and multiplies the learning rate by FACTOR, at most DROPS times; at the
 next such plateau it stops (or at max_steps), keeping the best weights.
 The validation AP decides, not the loss: the focal loss reaches its lowest
 within the first few hundred steps and then swings by a third from one
-measurement to the next while the detector is still learning to rank."""
+measurement to the next while the detector is still learning to rank; and
+the AP of some trainings stays near 0 for the first few hundred steps
+before it takes off (WARMUP)."""
 
 from __future__ import annotations
 
@@ -26,9 +28,9 @@ from ..downstream import detector, metrics
 
 CROP, BATCH, POSITIVE = 32, 32, 0.7
 EVERY, PATIENCE, MIN_GAIN = 50, 3, 0.01
-FACTOR, DROPS = 0.1, 1
-REGIME = (f"Adam, learning rate 3e-3; at a plateau of the validation AP (no rise of {MIN_GAIN} in {PATIENCE} "
-          f"measurements) back to the best weights and the rate times {FACTOR:g}, {DROPS} time(s), then stop")
+FACTOR, DROPS, WARMUP = 0.1, 1, 500
+REGIME = (f"Adam, learning rate 3e-3; after step {WARMUP}, at a plateau of the validation AP (no rise of {MIN_GAIN} "
+          f"in {PATIENCE} measurements) back to the best weights and the rate times {FACTOR:g}, {DROPS} time(s), then stop")
 
 
 @dataclass(frozen=True)
@@ -102,7 +104,7 @@ def fit(x_train: np.ndarray, centers: np.ndarray, x_val: np.ndarray, val_centers
             pending = []
             if ap > best + MIN_GAIN:
                 best, best_state, best_step, since = ap, copy.deepcopy(model.state_dict()), step, 0
-            else:
+            elif step > WARMUP:
                 since += 1
                 if since >= PATIENCE:
                     if drops == DROPS:
