@@ -38,7 +38,8 @@ from . import patches, train
 FAMILIES = ("sky", "real")
 SIZES = (2.0, 6.0)  # the drone's diameter range (px), both families
 # Contrast ranges (gray levels), easiest first: the calibration's ladder.
-LADDER = ((48.0, 192.0), (32.0, 128.0), (24.0, 96.0), (16.0, 64.0), (10.0, 40.0), (6.0, 24.0), (4.0, 16.0), (3.0, 12.0), (2.0, 8.0))
+LADDER = ((48.0, 192.0), (32.0, 128.0), (24.0, 96.0), (16.0, 64.0), (10.0, 40.0), (6.0, 24.0), (4.0, 16.0),
+          (3.0, 12.0), (2.0, 8.0))
 # Written by --calibrate (docs/downstream/detection/calibration.md): the
 # contrast range per family at which gray's AP lies in [0.2, 0.7].
 CALIBRATED = {"sky": (16.0, 64.0), "real": (24.0, 96.0)}

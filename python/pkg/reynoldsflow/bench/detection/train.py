@@ -30,7 +30,8 @@ CROP, BATCH, POSITIVE = 32, 32, 0.7
 EVERY, PATIENCE, MIN_GAIN = 50, 3, 0.01
 FACTOR, DROPS, WARMUP = 0.1, 1, 500
 REGIME = (f"Adam, learning rate 3e-3; after step {WARMUP}, at a plateau of the validation AP (no rise of {MIN_GAIN} "
-          f"in {PATIENCE} measurements) back to the best weights and the rate times {FACTOR:g}, {DROPS} time(s), then stop")
+          f"in {PATIENCE} measurements) back to the best weights and the rate times {FACTOR:g}, {DROPS} time(s), "
+          "then stop")
 
 
 @dataclass(frozen=True)
