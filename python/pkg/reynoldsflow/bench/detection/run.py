@@ -53,7 +53,7 @@ DEFAULT = dict(seeds=5, train=3000, val=400, test=1000, max_steps=3000, every=50
 QUICK = dict(seeds=1, train=16, val=8, test=12, max_steps=20, every=10, bootstrap=50)
 HELP = dict(seeds="seeds (each: its own patches, crops and initial weights)", train="training patches per seed",
             val="validation patches per seed (early stopping)", test="test patches per seed",
-            max_steps="most training steps", every="steps between validation losses",
+            max_steps="most training steps", every="steps between validation measurements (AP and loss)",
             bootstrap="bootstrap replicates of the intervals")
 
 

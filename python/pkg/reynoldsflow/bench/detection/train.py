@@ -1,4 +1,4 @@
-"""Training until the validation loss stops falling, and detection.
+"""Training until the validation AP stops rising, and detection.
 
 The network, loss, target and channel standardisation are the downstream
 benchmark's (``downstream.detector``). Each step draws BATCH crops of CROP
@@ -36,7 +36,7 @@ REGIME = (f"Adam, learning rate 3e-3; after step {WARMUP}, at a plateau of the v
 
 @dataclass(frozen=True)
 class Curve:
-    steps: list  # the steps at which the validation loss was measured
+    steps: list  # the steps at which the validation AP and loss were measured
     val_loss: list
     val_ap: list  # AP (3 px) on the validation patches, the stopping criterion
     train_loss: list  # mean training loss over the steps since the previous measurement
