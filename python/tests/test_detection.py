@@ -96,11 +96,15 @@ def test_patches_are_distinct_and_hold_their_drone():
 
 def test_docs_carry_the_committed_run():
     """docs/evaluation.md's detection table is the committed run's
-    (docs/downstream/detection/report.md), whose command is named beside it."""
+    (docs/downstream/detection/report.md), whose command, the defaults, is
+    named beside it; gray's AP there lies in the calibration's range on both
+    families."""
     root = Path(os.environ["REYNOLDSFLOW_REPO"])
     rep = (root / "docs" / "downstream" / "detection" / "report.md").read_text()
     command = re.search(r"Command: `([^`]+)`", rep).group(1)
-    assert command.startswith("python -m reynoldsflow.bench.detection --out docs/downstream/detection ")
+    assert command == "python -m reynoldsflow.bench.detection --out docs/downstream/detection"  # the defaults
+    gray = re.search(r"^\| gray \| ([0-9.]+) \[[^|]*\| ([0-9.]+) \[", rep, re.M)
+    assert all(run.GRAY_RANGE[0] <= float(x) <= run.GRAY_RANGE[1] for x in gray.groups()), gray.group(0)
     docs = (root / "docs" / "evaluation.md").read_text()
     assert command in " ".join(docs.split())
 

@@ -9,7 +9,7 @@ Per scene family and seed, thousands of distinct composited 64x64 patches
 skies or real footage, training and test from different videos), every
 input computed on each; the downstream benchmark's heatmap network trained
 on each input with the same crops in the same order until its validation
-loss stops falling (the curve is reported), then AP (3 px) on held-out
+AP stops rising (the curve is reported), then AP (3 px) on held-out
 patches; bootstrap 95 % intervals over seeds and patches, paired
 differences rf - each input. The task's difficulty (the drone's size and
 contrast ranges) is calibrated once, on the gray input only, with seeds
