@@ -12,7 +12,8 @@ scripts/test-ros2 and scripts/bench-ros2.
 Before the frames, an 8x8 warm-up stream runs until the node answers, so
 both directions are matched (a best-effort sample sent before that is lost,
 as DDS means it). Frames then go in lock-step: each waits for the outputs it
-must give (`--window N` lets N frames be in flight, for the bench). Every
+must give, and one that owes none (a stream's first) is followed after a
+pause (`--window N` lets N frames be in flight, for the bench). Every
 wait is bounded; a missing output fails the run rather than hanging it.
 """
 
@@ -27,6 +28,8 @@ from sensor_msgs.msg import Image
 
 ACCEPTED = {"mono8": 1, "rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4}
 WARM_UP = 8
+# After a frame that owes no output, before the next (lock-step only).
+PACE_S = 0.25
 
 
 def log(line):
@@ -171,6 +174,13 @@ def stream(args):
             peer.publish(w, h, enc, step, data, sec, nsec, frame_id)
             sent += 1
             pending.append(len(expected))
+            if not owed and args.window == 1:
+                # Lock-step paces every frame that owes an output; one that
+                # owes none (a stream's first frame) would be followed at
+                # once by the next, and two 2.7 MB best-effort samples back
+                # to back can overrun the node's socket buffer, losing the
+                # second whole. Give the node the time to take it.
+                peer.spin_until(lambda: False, PACE_S)
             # Lock-step (window 1), or up to --window frames in flight.
             while len(pending) >= args.window:
                 want = pending.pop(0)
