@@ -73,6 +73,22 @@ pub struct Options {
     pub stop: Stop,
 }
 
+impl Options {
+    /// A plain run on `threads` workers: one result a pair, every frame
+    /// read, results named after their first frame, nothing recorded, and
+    /// a fresh [`Stop`] no one else holds.
+    pub fn new(threads: usize) -> Self {
+        Self {
+            threads,
+            keep_count: false,
+            max_frames: None,
+            pair_names: false,
+            record_frames: false,
+            stop: Stop::new(),
+        }
+    }
+}
+
 /// One result as a sample: its files and what it came from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {
@@ -783,12 +799,8 @@ mod tests {
                 writer: &mut bytes,
             },
             Options {
-                threads,
                 keep_count,
-                max_frames: None,
-                pair_names: false,
-                record_frames: false,
-                stop: Stop::new(),
+                ..Options::new(threads)
             },
             &mut || calls += 1,
             overlap,

@@ -123,12 +123,8 @@ fn run(
             writer: &mut out,
         },
         Options {
-            threads,
-            keep_count: false,
-            max_frames: None,
-            pair_names: false,
-            record_frames: false,
             stop: stop.clone(),
+            ..Options::new(threads)
         },
         &mut || {
             delivered += 1;

@@ -13,7 +13,6 @@ use reynoldsflow_host::outputs::{OutputSpec, StreamFormat};
 use reynoldsflow_host::pipeline::{self, Destination, Options};
 use reynoldsflow_host::sequence::y4m::Y4mSource;
 use reynoldsflow_host::settings::{EngineKind, ScaleArg};
-use reynoldsflow_host::stop::Stop;
 
 const W: usize = 160;
 const H: usize = 120;
@@ -97,14 +96,7 @@ fn large_allocations(
             format,
             writer: &mut out,
         },
-        Options {
-            threads,
-            keep_count: false,
-            max_frames: None,
-            pair_names: false,
-            record_frames: false,
-            stop: Stop::new(),
-        },
+        Options::new(threads),
         &mut || {},
     )
     .unwrap();
