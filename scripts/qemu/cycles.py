@@ -6,7 +6,8 @@ executed between the markers, its executions and its taken exits).
 Each executed instruction is classed from the ELF's disassembly and given
 the cycles of the Cortex-M4 Technical Reference Manual's instruction timings
 (r0p1: the instruction table, 3.3.1, its load/store pairing rules, 3.3.2,
-and the FPU's table); the M33 is given the same (its TRM publishes none).
+and the FPU's table); the M33 is given the same (no published M33
+timings were found).
 scripts/qemu/validate.py checks the model against the TRM's worked
 examples and tables (docs/PERFORMANCE.md, "Validation of the cycle model").
 
