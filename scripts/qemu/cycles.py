@@ -5,18 +5,25 @@ executed between the markers, its executions and its taken exits).
 
 Each executed instruction is classed from the ELF's disassembly and given
 the cycles of the Cortex-M4 Technical Reference Manual's instruction timings
-(r0p1, section 3.3.1; the M33's TRM gives the same for these classes):
+(r0p1: the instruction table, 3.3.1, its load/store pairing rules, 3.3.2,
+and the FPU's table); the M33 is given the same (no published M33
+timings were found).
+scripts/qemu/validate.py checks the model against the TRM's worked
+examples and tables (docs/PERFORMANCE.md, "Validation of the cycle model").
 
   class                          cycles
   ALU, shifts, DSP (SADD16...)   1
-  MUL, SMULL/UMULL, SMLAL/UMLAL  1
-  MLA, MLS                       2
+  MUL, MLA, MLS, SMULL/UMULL,    1
+    SMLAL/UMLAL
   SDIV, UDIV                     12 (2 to 12: the worst case)
-  LDR*/STR* (one register)       2; 1 right after another load or store
-                                    (the TRM's pipelined neighbours)
+  LDR* (one register)            2; 1 right after a single load whose
+                                    result is not its address (pipelined)
+  STR* (one register), immediate 1 ("always one cycle")
+    offset
+  STR* with a register offset    2; 1 right after a single load
   LDRD/STRD                      3
   LDM/STM/PUSH/POP of N regs     1 + N
-  VLDR/VSTR                      2; 1 after another load or store
+  VLDR/VSTR                      2; 1 after another single load or store
   VLDM/VSTM/VPUSH/VPOP of N regs 1 + N
   VMLA/VMLS/VFMA/VFMS/VNMLA...   3
   VDIV, VSQRT                    14
@@ -26,6 +33,13 @@ the cycles of the Cortex-M4 Technical Reference Manual's instruction timings
   branch, not taken              1
   every taken exit (branches,    + P = 2 (the pipeline refill, 1 to 3:
     POP {pc}, BX, calls)            the middle), + the flash wait states
+  a load or store whose address  + 1 (no forwarding path to the address
+    register the instruction        generation)
+    before wrote (data processing)
+
+"Right after" and "the instruction before" hold for the executions that
+fell through from the previous address (its executions less its taken
+exits); the others entered by a branch and pair with nothing.
 
 Flash wait states (`--flash-ws`): 0 for code in RAM or hits of a flash
 accelerator (the STM32 ART); with N, every taken exit and every literal
@@ -124,14 +138,69 @@ def classify(mnemonic, operands):
         return "vfp", 1, False
     if name in ("sdiv", "udiv"):
         return "divide", 12, False
-    if name in ("mla", "mls"):
-        return "multiply", 2, False
-    if name in ("mul", "muls", "smull", "umull", "smlal", "umlal") or name.startswith("smla") \
+    if name in ("mul", "mla", "mls", "muls", "smull", "umull", "smlal", "umlal") or name.startswith("smla") \
             or name.startswith("smul") or name.startswith("smlal"):
         return "multiply", 1, False
     if name.startswith("it"):
         return "it", 1, False
     return "alu", 1, False
+
+
+REGISTER = re.compile(r"\b(r\d{1,2}|sp|lr|pc|ip|fp|sb|sl)\b")
+NO_DESTINATION = ("cmp", "cmn", "tst", "teq", "nop", "msr", "dmb", "dsb", "isb", "bkpt", "svc", "cpsid", "cpsie")
+MEMORY = ("load/store", "literal", "ldm/stm")
+
+
+def address_registers(mnemonic, operands):
+    """Core registers an instruction's address is made from."""
+    name = base(mnemonic)
+    m = re.search(r"\[([^\]]*)\]", operands)
+    if m:
+        return set(REGISTER.findall(m.group(1)))
+    if name in ("push", "pop", "vpush", "vpop"):
+        return {"sp"}
+    if re.match(r"^v?(ldm|stm)", name):
+        return set(REGISTER.findall(operands.split(",")[0]))
+    return set()
+
+
+def written(mnemonic, operands, cls):
+    """Core registers a data-processing instruction writes."""
+    name = base(mnemonic)
+    if cls not in ("alu", "multiply", "divide") or name in NO_DESTINATION or name.startswith("it"):
+        return set()
+    regs = REGISTER.findall(operands)
+    if name in ("smull", "umull", "smlal", "umlal") or name.startswith("smlal"):
+        return set(regs[:2])
+    return set(regs[:1])
+
+
+def loaded(mnemonic, operands):
+    """The register a single load writes: its first operand."""
+    regs = REGISTER.findall(operands.split("[")[0])
+    return set(regs[:1])
+
+
+def single_cycles(mnemonic, operands, before):
+    """Cycles of a single load or store (LDR*, STR*, VLDR, VSTR) after the
+    instruction `before` ((mnemonic, operands) it fell through from, or
+    None): the TRM's pairing rules (3.3.2)."""
+    name = base(mnemonic)
+    fp = name.startswith("v")
+    store = name.startswith("str") or name.startswith("vstr")
+    address = address_registers(mnemonic, operands)
+    if store and not fp and len(address) == 1:
+        return 1  # STR Rx,[Ry,#imm] is always one cycle
+    if before is None:
+        return 2
+    b_name = base(before[0])
+    b_single = bool(MEMORY_SINGLE.match(b_name))
+    if fp:
+        return 1 if b_single else 2
+    b_load = b_single and (b_name.startswith("ldr") or b_name.startswith("vldr"))
+    if b_load and not loaded(*before) & address:
+        return 1
+    return 2
 
 
 def function_of(funcs, starts, pc):
@@ -163,17 +232,23 @@ def model(insns, profile, flash_ws, funcs=None):
         if mnemonic.startswith("<unknown"):
             sys.exit(f"cycles.py: {pc:#x} executed but not decoded (--mcpu?)")
         cls, cycles, single = classify(mnemonic, operands)
-        # A load or store right after another pipelines: one cycle. Only
-        # when the previous address is one (and this is not a branch
-        # target: approximated by the previous instruction's executions
-        # covering this one's).
+        # The executions that fell through from the previous address (its
+        # executions less its taken exits) follow it: they pair with it.
+        # The others entered by a branch and pair with nothing.
         before = previous.get(pc)
-        if single and before is not None:
-            b_cls, _, b_single = classify(*insns[before])
-            b_count = counts.get(before, (0, 0))[0]
-            if b_single and b_count >= count:
-                cycles = 1
-        c = count * cycles + taken * (BRANCH_REFILL + flash_ws)
+        follow = 0
+        if before is not None and before in counts:
+            b_count, b_taken = counts[before]
+            follow = max(0, min(count, b_count - b_taken))
+        b_insn = insns[before] if follow else None
+        alone = after = cycles
+        if single:
+            alone = single_cycles(mnemonic, operands, None)
+            after = single_cycles(mnemonic, operands, b_insn) if b_insn else alone
+        if b_insn and cls in MEMORY and written(*b_insn, classify(*b_insn)[0]) \
+                & address_registers(mnemonic, operands):
+            after += 1  # its address waits for the register bank
+        c = follow * after + (count - follow) * alone + taken * (BRANCH_REFILL + flash_ws)
         if cls == "literal":
             c += count * flash_ws
         by_class[cls][0] += count
