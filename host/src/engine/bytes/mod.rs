@@ -11,7 +11,7 @@
 //! time), and [`Isa::Best`]'s byte step takes NEON lanes (`bytes/neon.rs`).
 
 use multiversion::multiversion;
-use multiversion::target::{match_target, target_cfg_f};
+use multiversion::target::match_target;
 use reynoldsflow_core::{
     ByteScale, Error, FramePair, Job, Memory, Plan, Scaling, Sink, TileEngine,
 };
@@ -221,12 +221,10 @@ best_targets! {
     /// What [`Isa::Best`] runs on this CPU, for reports: the clone that
     /// dispatch selects names itself.
     pub fn best_name() -> &'static str {
-        if target_cfg_f!(target_feature = "avx2") {
-            "avx2"
-        } else if target_cfg_f!(all(target_arch = "aarch64", target_feature = "neon")) {
-            "neon"
-        } else {
-            "portable"
+        match_target! {
+            "x86_64+avx2" => "avx2",
+            "aarch64+neon" => "neon",
+            _ => "portable",
         }
     }
 }
