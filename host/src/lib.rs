@@ -60,7 +60,7 @@ pub mod internals {
     pub use crate::engine::bands::strip_width;
     /// The engine pass per instruction set.
     pub mod bytes {
-        pub use crate::engine::bytes::{Isa, Pass, best_name, run};
+        pub use crate::engine::bytes::{Isa, Pass, best_name, kept_to_bytes, run};
     }
     pub use crate::engine::lane::{FixedOutput, compute_fixed, compute_fixed_on, planes_of};
     pub use crate::engine::memory::HostEngine;

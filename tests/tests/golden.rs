@@ -6,15 +6,23 @@
 //! blessing also appends to `SUMMARY.txt`, below [`CHANGES`], how many
 //! bytes of each output changed against the goldens it replaces and by how
 //! much (the check compares only the part above that line).
+//!
+//! The host engine's image (`PairEngine::image`, per-frame min–max: the
+//! engine pass, then the byte step of the widest instructions, AVX2 or
+//! NEON) must give the committed min–max bytes too, on one thread and on
+//! several; `scripts/test-resample-aarch64` runs this file under
+//! `qemu-aarch64`, so the aarch64 build's bytes are held to these.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use fixed::types::U16F16;
 use reynoldsflow_core::{Params, Scaling};
+use reynoldsflow_host::engine::PairEngine;
 use reynoldsflow_host::internals::{FixedOutput, compute_fixed};
 use reynoldsflow_host::io::image_file;
 use reynoldsflow_host::limits::Limits;
+use reynoldsflow_host::settings::Settings;
 use reynoldsflow_tests::{vector_cases, vectors_dir};
 
 /// The line that starts the record of the last blessing's changes.
@@ -152,6 +160,18 @@ fn fixed_core_output_equals_the_golden_bytes() {
         let minmax =
             compute_fixed(&f0, &f1, Params::DEFAULT, None, Scaling::PerFrameMinMax).unwrap();
         let fixed = compute_fixed(&f0, &f1, Params::DEFAULT, None, fixed).unwrap();
+        for threads in [1, 3] {
+            let settings = Settings {
+                threads: Some(threads),
+                ..Settings::default()
+            };
+            let mut engine = PairEngine::new(&settings).unwrap();
+            let image = engine.image_vec(&f0, &f1).unwrap();
+            assert!(
+                image == minmax.rep,
+                "{case}: PairEngine::image on {threads} thread(s)"
+            );
+        }
         // PNGs are compared by their pixels (encoders may change), the fields by their bytes.
         let outputs = [
             ("fields.bin", field_bytes(&minmax)),

@@ -296,11 +296,17 @@ mod tests {
     }
 
     /// The min–max byte step of both compilations (AVX2 lanes where the
-    /// CPU has them) gives the bytes of `ByteScale::byte` one pixel at a
-    /// time, on every length around the lanes' steps and on magnitudes of
-    /// every kind: zeros, ties, the range's ends, beyond them, huge, NaN.
+    /// CPU has them, NEON's on aarch64: `scripts/test-resample-aarch64`
+    /// runs this under `qemu-aarch64`) gives the bytes of
+    /// `ByteScale::byte` one pixel at a time, on every length around the
+    /// lanes' steps (32 pixels, 16) and on magnitudes of every kind: zeros
+    /// of both signs, ties, the range's ends, beyond them, subnormal, huge,
+    /// infinite, negative, NaN; `fⁿ` from 0 to 255.
     #[test]
     fn the_byte_step_is_the_byte_of_each_pixel() {
+        // On aarch64 `Best` is the NEON step, not the portable one again.
+        #[cfg(target_arch = "aarch64")]
+        assert_eq!(bytes::best_name(), "neon");
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = || {
             seed ^= seed << 13;
@@ -323,14 +329,27 @@ mod tests {
                     0 => 0.0,
                     1 => 0.25 + (r % 15) as f32 * (3.25 / 255.0) * 0.5,
                     2 => f32::from_bits((r >> 40) as u32 & 0x7F7F_FFFF),
-                    3 => [f32::MAX, f32::INFINITY, f32::NAN, -1.0][(r % 4) as usize],
+                    3 => [
+                        f32::MAX,
+                        f32::INFINITY,
+                        f32::NAN,
+                        -1.0,
+                        -0.0,
+                        f32::MIN,
+                        f32::NEG_INFINITY,
+                        f32::MIN_POSITIVE,
+                        f32::from_bits(1),
+                        -f32::NAN,
+                    ][(r % 10) as usize],
                     4 => 3.5 + (r % 100) as f32,
                     _ => (r % 1_000_000) as f32 * 4e-6,
                 }
             };
             let planes: [Vec<f32>; 2] =
                 std::array::from_fn(|_| (0..len as u64).map(&mut magnitude).collect());
-            let luma: Vec<u8> = (0..len).map(|i| (i * 37 % 256) as u8).collect();
+            let luma: Vec<u8> = (0..len)
+                .map(|i| [0, 255, (i * 37 % 256) as u8][i % 3])
+                .collect();
             for pair in scales.windows(2) {
                 let scales = [pair[0], pair[1]];
                 let want: Vec<u8> = (0..len)

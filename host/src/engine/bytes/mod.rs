@@ -6,10 +6,12 @@
 //! (tested in `tests/tests/simd.rs`). Per-frame min–max's byte step, which
 //! runs after the pass, is compiled the same two ways, and where the CPU has
 //! AVX2 takes its lanes through intrinsics (`bytes/avx2.rs`; tested in
-//! `engine::lane`).
+//! `engine::lane`). On aarch64 the pass has one compilation (NEON is in
+//! every aarch64 target, and the core's NEON kernels are fixed at compile
+//! time), and [`Isa::Best`]'s byte step takes NEON lanes (`bytes/neon.rs`).
 
 use multiversion::multiversion;
-use multiversion::target::{match_target, target_cfg_f};
+use multiversion::target::match_target;
 use reynoldsflow_core::{
     ByteScale, Error, FramePair, Job, Memory, Plan, Scaling, Sink, TileEngine,
 };
@@ -18,12 +20,15 @@ use portable::bytes_from_kept;
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
+mod neon;
 mod portable;
 
 /// Which compilation of the engine pass runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Isa {
-    /// The widest instructions this CPU has (AVX2 where present).
+    /// The widest instructions this CPU has (AVX2 where present; NEON on
+    /// aarch64).
     #[default]
     Best,
     /// The baseline of the target (SSE2 on x86-64), whatever the CPU.
@@ -157,8 +162,8 @@ fn baseline<K: Kind, M: Memory, S: Sink>(
 
 /// The second step of per-frame min–max (`portable::bytes_from_kept`),
 /// compiled for `isa` like the pass: its 64-bit multiplies and compares
-/// take AVX2's lanes.
-pub(crate) fn kept_to_bytes(
+/// take AVX2's lanes; on aarch64 [`Isa::Best`] takes NEON's.
+pub fn kept_to_bytes(
     isa: Isa,
     kept: [&[f32]; 2],
     luma: &[u8],
@@ -197,8 +202,9 @@ best_targets! {
         }
     }
 
-    /// Where the CPU has AVX2, the step in its lanes (`avx2.rs`);
-    /// elsewhere the portable step compiled for the clone's target.
+    /// Where the CPU has AVX2, the step in its lanes (`avx2.rs`); on
+    /// aarch64 in NEON's (`neon.rs`); elsewhere the portable step compiled
+    /// for the clone's target.
     fn kept_to_bytes_best(
         kept: [&[f32]; 2],
         luma: &[u8],
@@ -207,6 +213,7 @@ best_targets! {
     ) {
         match_target! {
             "x86_64+avx2" => crate::engine::bytes::avx2::kept_to_bytes(kept, luma, rgb, scales),
+            "aarch64+neon" => crate::engine::bytes::neon::kept_to_bytes(kept, luma, rgb, scales),
             _ => bytes_from_kept(kept, luma, rgb, scales),
         }
     }
@@ -214,10 +221,10 @@ best_targets! {
     /// What [`Isa::Best`] runs on this CPU, for reports: the clone that
     /// dispatch selects names itself.
     pub fn best_name() -> &'static str {
-        if target_cfg_f!(target_feature = "avx2") {
-            "avx2"
-        } else {
-            "portable"
+        match_target! {
+            "x86_64+avx2" => "avx2",
+            "aarch64+neon" => "neon",
+            _ => "portable",
         }
     }
 }
