@@ -40,10 +40,19 @@ use core::arch::aarch64::{
     vsqrtq_f32, vst1q_f32, vst1q_s32, vst3q_u8, vsubq_f32,
 };
 
+use core::arch::aarch64::{
+    int16x8_t, uint8x8_t, vaddq_s16, vcvtq_n_f32_s32, vdupq_n_s64, vget_low_s16, vget_low_s32,
+    vld1_u8, vld1q_s16, vmlaq_n_s16, vmlsl_high_s32, vmlsl_s32, vmlsq_n_s32, vmovl_high_s16,
+    vmovl_s16, vmull_high_n_s32, vmull_high_s16, vmull_n_s32, vmull_s16, vreinterpretq_s16_u16,
+    vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
+};
+use core::ops::Range;
+
 use super::KernelSet;
 use super::blocked::{
     self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
 };
+use crate::stages::{ProductRows, ResidualInputs, cut, portable_products_row};
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
 
@@ -73,6 +82,162 @@ impl KernelSet for Neon {
         // SAFETY: NEON is in the build's features (the module's `cfg`).
         unsafe { rgb_steps([m_d, m_c], luma, scales.map(ByteScale::parts), out) };
         Self::rgb_pixels(d_rest, c_rest, l_rest, scales, o_rest);
+    }
+
+    /// [`PRODUCTS_STEP`] columns a step in lanes ([`products_steps`]), the
+    /// rest by the portable loop.
+    #[inline(always)]
+    fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
+        let ProductRows {
+            ints: [xx, xy, yy],
+            floats: [xd, yd],
+            ..
+        } = rows;
+        let len = cols.len();
+        let whole = len - len % PRODUCTS_STEP;
+        let (
+            Some((xx, xx_rest)),
+            Some((xy, xy_rest)),
+            Some((yy, yy_rest)),
+            Some((xd, xd_rest)),
+            Some((yd, yd_rest)),
+        ) = (
+            xx.split_at_mut_checked(whole),
+            xy.split_at_mut_checked(whole),
+            yy.split_at_mut_checked(whole),
+            xd.split_at_mut_checked(whole),
+            yd.split_at_mut_checked(whole),
+        )
+        else {
+            return;
+        };
+        // SAFETY: NEON is in the build's features (the module's `cfg`).
+        unsafe { products_steps(input, [xx, xy, yy], [xd, yd], cols.start) };
+        let rest = cols.start + whole..cols.end;
+        portable_products_row(input, [xx_rest, xy_rest, yy_rest], [xd_rest, yd_rest], rest);
+    }
+}
+
+/// Columns a step of [`products_steps`]: eight, one vector of `i16`.
+const PRODUCTS_STEP: usize = 8;
+
+/// `stages::products_of` on the columns from `start` on, as many as the
+/// product rows hold (a multiple of [`PRODUCTS_STEP`]), eight a step:
+///
+/// | quantity | format, lanes | bound |
+/// |---|---|---|
+/// | `p0` (3×3 neighbourhood) | u8 ×8 | 255 |
+/// | differences of `p0`, `X`, `Y` (Sobel), `4·p0` | i16 ×8 | 255, 1020, 1020 |
+/// | `X², XY, Y²` (`SMULL` of `i16`) | i32 ×4 | `1020² < 2²⁰` |
+/// | `V` x, y; `Q = (Vx′ − Vx‵) + (Vy′ − Vy‵)` | i32 ×4 | `6 854 400 < 2²³`; `16 144 560 < 2²⁴` |
+/// | `T = −κl·d − X·Vx − Y·Vy − 4·p0·Q` (`SMULL`/`SMLSL`) | i64 ×2 | `2²² + 2·2³³ + 2³⁴ < 2³⁵` |
+/// | `⌊(T + 2^(σ−1)) / 2^σ⌋` (`SRSHL` by `−σ`, then narrowed) | i32 ×4 | `< 2²⁷` (`σ ≥ 8`) |
+/// | `Dn′ = that − κh·d` | i32 ×4 | `≤ 2²⁷` (`stages`) |
+/// | `Dn′·2⁻²⁰` (`SCVTF` with 20 fraction bits), `X·…`, `Y·…` | f32 ×4 | `stages` |
+///
+/// With `κ = κh·2^σ + κl`, `Dn = −κh·d·2^σ + T`, so `Dn′ = ⌊(Dn +
+/// 2^(σ−1)) / 2^σ⌋ = −κh·d + ⌊(T + 2^(σ−1)) / 2^σ⌋`: `stages::
+/// rounded_residual`'s value, which sums the same `Dn` in 32-bit halves.
+/// `SRSHL` adds `2^(σ−1)` before its arithmetic shift without overflow.
+/// Every integer step is exact (the lanes' wrapping never happens within
+/// the bounds); `SCVTF` with fraction bits rounds `Dn′ / 2²⁰` once, which
+/// is `Dn′ as f32 · 2⁻²⁰` (scaling by a power of two is exact: no overflow,
+/// no subnormal), and each `f32` product rounds once, as the portable.
+#[target_feature(enable = "neon")]
+fn products_steps(
+    input: &ResidualInputs<'_>,
+    [xx, xy, yy]: [&mut [i32]; 3],
+    [xd, yd]: [&mut [f32]; 2],
+    start: usize,
+) {
+    let ResidualInputs {
+        vx,
+        vy: [vy_up, vy, vy_down],
+        p0: [up, mid, down],
+        d,
+        kappa: [kappa_high, kappa_low],
+        shift,
+    } = *input;
+    let len = xx.len();
+    if [xy.len(), yy.len(), xd.len(), yd.len()]
+        .iter()
+        .any(|&l| l != len)
+    {
+        return;
+    }
+    // `p0` and `V` x one column wider either side; the rest as wide as the row.
+    let first = start.wrapping_sub(1);
+    let wide = |row| cut::<u8>(row, first, len + 2);
+    let at = |row| cut::<i32>(row, start, len);
+    let (Some(up), Some(mid), Some(down), Some(vx), Some(d)) = (
+        wide(up),
+        wide(mid),
+        wide(down),
+        cut(vx, first, len + 2),
+        cut(d, start, len),
+    ) else {
+        return;
+    };
+    let (Some(vy_up), Some(vy), Some(vy_down)) = (at(vy_up), at(vy), at(vy_down)) else {
+        return;
+    };
+    let right_shift = vdupq_n_s64(-i64::from(shift));
+    for s in 0..len / PRODUCTS_STEP {
+        let i = s * PRODUCTS_STEP;
+        // SAFETY: columns `i .. i + 8` lie within `len` (and `i .. i + 10`
+        // within the wide rows, `len + 2`): the lengths checked above.
+        unsafe {
+            let taps = |row: &[u8]| -> [uint8x8_t; 3] {
+                [0, 1, 2].map(|k| vld1_u8(row.as_ptr().add(i + k)))
+            };
+            let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
+            let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
+            let twice_plus =
+                |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
+            let x = twice_plus(diff(pu[2], pu[0]), diff(pm[2], pm[0]), diff(pd[2], pd[0]));
+            let y = twice_plus(diff(pd[0], pu[0]), diff(pd[1], pu[1]), diff(pd[2], pu[2]));
+            let square = |a: int16x8_t, b: int16x8_t| {
+                [
+                    vmull_s16(vget_low_s16(a), vget_low_s16(b)),
+                    vmull_high_s16(a, b),
+                ]
+            };
+            for (row, lanes) in [&mut *xx, &mut *xy, &mut *yy].into_iter().zip([
+                square(x, x),
+                square(x, y),
+                square(y, y),
+            ]) {
+                i32::store(row.as_mut_ptr().add(i), lanes[0]);
+                i32::store(row.as_mut_ptr().add(i + 4), lanes[1]);
+            }
+            let widen = |a: int16x8_t| [vmovl_s16(vget_low_s16(a)), vmovl_high_s16(a)];
+            let (x, y) = (widen(x), widen(y));
+            let p4 = widen(vreinterpretq_s16_u16(vshll_n_u8::<2>(pm[1])));
+            let d = widen(vld1q_s16(d.as_ptr().add(i)));
+            for h in 0..2 {
+                let j = i + 4 * h;
+                let load = |row: &[i32], k: usize| i32::load(row.as_ptr().add(j + k));
+                let (vx_l, vx_c, vx_r) = (load(vx, 0), load(vx, 1), load(vx, 2));
+                let (vy_u, vy_c, vy_d) = (load(vy_up, 0), load(vy, 0), load(vy_down, 0));
+                let q = vaddq_s32(vsubq_s32(vx_r, vx_l), vsubq_s32(vy_d, vy_u));
+                let low = |a: int32x4_t| vget_low_s32(a);
+                let mut t_low = vmull_n_s32(low(d[h]), -kappa_low);
+                t_low = vmlsl_s32(t_low, low(x[h]), low(vx_c));
+                t_low = vmlsl_s32(t_low, low(y[h]), low(vy_c));
+                t_low = vmlsl_s32(t_low, low(p4[h]), low(q));
+                let mut t_high = vmull_high_n_s32(d[h], -kappa_low);
+                t_high = vmlsl_high_s32(t_high, x[h], vx_c);
+                t_high = vmlsl_high_s32(t_high, y[h], vy_c);
+                t_high = vmlsl_high_s32(t_high, p4[h], q);
+                let rounded = vuzp1q_s32(
+                    vreinterpretq_s32_s64(vrshlq_s64(t_low, right_shift)),
+                    vreinterpretq_s32_s64(vrshlq_s64(t_high, right_shift)),
+                );
+                let dn = vcvtq_n_f32_s32::<20>(vmlsq_n_s32(rounded, d[h], kappa_high));
+                f32::store(xd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(x[h]), dn));
+                f32::store(yd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(y[h]), dn));
+            }
+        }
     }
 }
 
