@@ -242,10 +242,21 @@ pub fn boundary_minus_domain<K: KernelSet>(
 ) {
     let [v1, v2, v3, v4] = vert;
     vertical_parts::<K>(d, v1, v2, v3, v4, span(n, 0));
-    let (ex, ey) = e;
+    K::smoothed_e([v1, v2, v3, v4], e, e_smoothed, n);
+}
+
+/// `E` on `[2, n−2)` (into `e`) from its four vertical parts, and the
+/// horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
+/// vertical one) on `[4, n−4)`: the ring keeps `E` smoothed along its row.
+/// The portable `KernelSet::smoothed_e`.
+#[inline(always)]
+pub(crate) fn portable_smoothed_e<K: KernelSet>(
+    [v1, v2, v3, v4]: [&[i16]; 4],
+    (ex, ey): Pair<'_, i32>,
+    e_smoothed: Pair<'_, i32>,
+    n: usize,
+) {
     horizontal_parts([v1, v2, v3, v4], ex, ey, span(n, 2));
-    // The horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
-    // vertical one): the ring keeps `E` smoothed along its row.
     horizontal_binomial::<K, _>(ex, e_smoothed.0, n, 4);
     horizontal_binomial::<K, _>(ey, e_smoothed.1, n, 4);
 }
@@ -468,8 +479,8 @@ fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
 #[inline(always)]
 pub fn smooth<K: KernelSet>(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e_smoothed;
-    vertical_binomial::<K, _>(ex, v.0, n, 4);
-    vertical_binomial::<K, _>(ey, v.1, n, 4);
+    K::smooth_column(ex, v.0, n);
+    K::smooth_column(ey, v.1, n);
     debug_assert!(
         v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
         "V beyond its bound"

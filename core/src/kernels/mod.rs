@@ -47,9 +47,9 @@ use core::ops::Range;
 use crate::ring::RowRing;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
-    Binomial, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, binomial_of,
-    horizontal_binomial, portable_products_row, running_binomial, sliding_binomial,
-    vertical_binomial, vertical_parts_of,
+    Binomial, FLOAT_CHANNELS, INT_CHANNELS, Pair, ProductRows, ResidualInputs, binomial_of,
+    horizontal_binomial, portable_products_row, portable_smoothed_e, running_binomial,
+    sliding_binomial, vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink, Pixels};
@@ -95,6 +95,23 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn vertical_parts(d: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
         vertical_parts_of(d, v1, v2, v3, v4);
+    }
+
+    /// `E` smoothed along the row (the horizontal half of `V`) on `[4, n −
+    /// 4)` into `e_smoothed`, from `E`'s four vertical parts (window
+    /// columns, valid on `[0, n)`): `stages::portable_smoothed_e`, which
+    /// also leaves `E` itself in `e` on `[2, n − 2)`, rows a set may use
+    /// as scratch instead (nothing reads them after).
+    #[inline(always)]
+    fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
+        portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
+    }
+
+    /// The vertical half of `V = G256 ⋆ E` on `[4, n − 4)` from the five
+    /// rows of `E` smoothed along the row centred on it (`stages::smooth`).
+    #[inline(always)]
+    fn smooth_column(rows: [&[i32]; 5], out: &mut [i32], n: usize) {
+        vertical_binomial::<Self, _>(rows, out, n, 4);
     }
 
     /// The five structure products on columns `cols`, into product rows

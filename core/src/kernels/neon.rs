@@ -46,13 +46,16 @@ use core::arch::aarch64::{
     vmovl_s16, vmull_high_n_s32, vmull_high_s16, vmull_n_s32, vmull_s16, vreinterpretq_s16_u16,
     vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
 };
+use core::arch::aarch64::{vextq_s32, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vsubq_s16};
 use core::ops::Range;
 
 use super::KernelSet;
 use super::blocked::{
     self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
 };
-use crate::stages::{ProductRows, ResidualInputs, cut, portable_products_row};
+use crate::stages::{
+    Pair, ProductRows, ResidualInputs, cut, cut_mut, portable_products_row, portable_smoothed_e,
+};
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
 
@@ -84,45 +87,211 @@ impl KernelSet for Neon {
         Self::rgb_pixels(d_rest, c_rest, l_rest, scales, o_rest);
     }
 
-    /// [`PRODUCTS_STEP`] columns a step in lanes ([`products_steps`]), the
-    /// rest by the portable loop.
+    /// [`E_STEP`] columns a step in lanes ([`smoothed_e_steps`]), `E`
+    /// itself never leaving them (`e` is left as it was); rows shorter
+    /// than a step by the portable loops.
+    #[inline(always)]
+    fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
+        if n < E_STEP + 8 {
+            portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { smoothed_e_steps(vert, e_smoothed, n) };
+        }
+    }
+
+    /// [`V_STEP`] columns a step in lanes ([`smooth_column_steps`]); rows
+    /// shorter than a step by the portable loop.
+    #[inline(always)]
+    fn smooth_column(rows: [&[i32]; 5], out: &mut [i32], n: usize) {
+        if n < V_STEP + 8 {
+            crate::stages::vertical_binomial::<Self, _>(rows, out, n, 4);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { smooth_column_steps(rows, out, n) };
+        }
+    }
+
+    /// [`PRODUCTS_STEP`] columns a step in lanes ([`products_steps`]);
+    /// rows shorter than a step by the portable loop.
     #[inline(always)]
     fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
-        let ProductRows {
-            ints: [xx, xy, yy],
-            floats: [xd, yd],
-            ..
-        } = rows;
-        let len = cols.len();
-        let whole = len - len % PRODUCTS_STEP;
-        let (
-            Some((xx, xx_rest)),
-            Some((xy, xy_rest)),
-            Some((yy, yy_rest)),
-            Some((xd, xd_rest)),
-            Some((yd, yd_rest)),
-        ) = (
-            xx.split_at_mut_checked(whole),
-            xy.split_at_mut_checked(whole),
-            yy.split_at_mut_checked(whole),
-            xd.split_at_mut_checked(whole),
-            yd.split_at_mut_checked(whole),
-        )
-        else {
-            return;
-        };
-        // SAFETY: NEON is in the build's features (the module's `cfg`).
-        unsafe { products_steps(input, [xx, xy, yy], [xd, yd], cols.start) };
-        let rest = cols.start + whole..cols.end;
-        portable_products_row(input, [xx_rest, xy_rest, yy_rest], [xd_rest, yd_rest], rest);
+        let ProductRows { ints, floats, .. } = rows;
+        if cols.len() < PRODUCTS_STEP {
+            portable_products_row(input, ints, floats, cols);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { products_steps(input, ints, floats, cols.start) };
+        }
     }
+}
+
+/// Output columns a step of [`smoothed_e_steps`]: eight, one vector of `i16`.
+const E_STEP: usize = 8;
+
+/// `E` of columns `c .. c + 8` (x, then y; each as two vectors of four
+/// `i32`s) from its vertical parts `v1 … v4` (`stages::boundary_minus_domain_x`
+/// and `_y`, term for term):
+///
+/// | quantity | format, lanes | bound |
+/// |---|---|---|
+/// | vertical parts `v1, v2, v3, v4` | i16 ×8 | 1530, 3060, 510, 1020 |
+/// | `Kbx3 = v1′ − v1‵`; `Box⋆Sobx = (v2′ + v2″) − (v2‵ + v2‴)` | i16 ×8 | 3060; 12 240 |
+/// | `Kby3 = v3‵ + 4·v3 + v3′`; `Box⋆Soby = (v4‴ + v4″) + 3·(v4‵ + v4′) + 4·v4` | i16 ×8 | 3060; 12 240 |
+/// | `E = Kb3 − 3·Box⋆Sob` (`SMLSL` by 3 of the widened parts) | i32 ×4 | 33 660 |
+///
+/// (primes: one and two columns right, back-primes left). Exact.
+///
+/// # Safety
+/// `2 ≤ c` and `c + 10 ≤` every part's length; NEON runs here.
+#[inline]
+#[target_feature(enable = "neon")]
+unsafe fn e_at(parts: [*const i16; 4], c: usize) -> [[int32x4_t; 2]; 2] {
+    let [v1, v2, v3, v4] = parts;
+    // SAFETY: the caller's: columns `c − 2 .. c + 10` lie in every part.
+    let at = |row: *const i16, k: usize| unsafe { vld1q_s16(row.add(c + k - 2)) };
+    let kb_x = vsubq_s16(at(v1, 3), at(v1, 1));
+    let bs_x = vsubq_s16(
+        vaddq_s16(at(v2, 3), at(v2, 4)),
+        vaddq_s16(at(v2, 1), at(v2, 0)),
+    );
+    let kb_y = vmlaq_n_s16(vaddq_s16(at(v3, 1), at(v3, 3)), at(v3, 2), 4);
+    let outer = vmlaq_n_s16(
+        vaddq_s16(at(v4, 0), at(v4, 4)),
+        vaddq_s16(at(v4, 1), at(v4, 3)),
+        3,
+    );
+    let bs_y = vmlaq_n_s16(outer, at(v4, 2), 4);
+    let e = |kb: int16x8_t, bs: int16x8_t| {
+        [
+            vmlsl_n_s16(vmovl_s16(vget_low_s16(kb)), vget_low_s16(bs), 3),
+            vmlsl_high_n_s16(vmovl_high_s16(kb), bs, 3),
+        ]
+    };
+    [e(kb_x, bs_x), e(kb_y, bs_y)]
+}
+
+/// The horizontal binomial of `E` at the four columns from `E`'s vector
+/// `left` on, from `left` and the vector `right` after it: [`binomial_mla`]
+/// of the taps `left`, its three shifts into `right` and `right`. Exact:
+/// within `16 · 33 660 < 2²⁰`.
+#[inline]
+#[target_feature(enable = "neon")]
+fn smooth_e(left: int32x4_t, right: int32x4_t) -> int32x4_t {
+    let (b, c, d) = (
+        vextq_s32::<1>(left, right),
+        vextq_s32::<2>(left, right),
+        vextq_s32::<3>(left, right),
+    );
+    binomial_mla(left, b, c, d, right)
+}
+
+/// `E` smoothed along the row on `[4, n − 4)` ([`KernelSet::smoothed_e`])
+/// from the four vertical parts (valid on `[0, n)`, `n ≥ 16`), eight
+/// columns a step: each step's `E` ([`e_at`]) two to ten columns right of
+/// its first output, the four left of them carried from the step before
+/// (the first step's and the last's from one more [`e_at`]); the last
+/// step ends at the row's end (it writes again, the same values, the
+/// columns the step before it wrote).
+#[target_feature(enable = "neon")]
+fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: usize) {
+    let (Some(v1), Some(v2), Some(v3), Some(v4)) =
+        (cut(v1, 0, n), cut(v2, 0, n), cut(v3, 0, n), cut(v4, 0, n))
+    else {
+        return;
+    };
+    let Some(len) = n.checked_sub(8) else {
+        return;
+    };
+    let (Some(sx), Some(sy), Some(last)) = (
+        cut_mut(sx, 4, len),
+        cut_mut(sy, 4, len),
+        len.checked_sub(E_STEP),
+    ) else {
+        return;
+    };
+    let parts = [v1.as_ptr(), v2.as_ptr(), v3.as_ptr(), v4.as_ptr()];
+    let out = [sx.as_mut_ptr(), sy.as_mut_ptr()];
+    // `E` at the four columns left of output `i`'s (window column `4 + i`)
+    // and two right of them: columns `2 + i .. 6 + i`.
+    // SAFETY: `i ≤ last = n − 16`, so `2 ≤ 2 + i` and `2 + i + 10 ≤ n`.
+    let first = |i: usize| unsafe { e_at(parts, 2 + i) }.map(|[low, _]| low);
+    let step = |i: usize, left: [int32x4_t; 2]| {
+        // SAFETY: `i ≤ last = n − 16`, so `2 ≤ 6 + i` and `6 + i + 10 ≤
+        // n`; outputs `i .. i + 8 ≤ len`.
+        unsafe {
+            let e = e_at(parts, 6 + i);
+            for ((row, [a, b]), left) in out.iter().zip(e).zip(left) {
+                i32::store(row.add(i), smooth_e(left, a));
+                i32::store(row.add(i + 4), smooth_e(a, b));
+            }
+            e.map(|[_, b]| b)
+        }
+    };
+    let mut left = first(0);
+    for s in 0..len / E_STEP {
+        left = step(s * E_STEP, left);
+    }
+    if len % E_STEP != 0 {
+        step(last, first(last));
+    }
+}
+
+/// Columns a step of [`smooth_column_steps`]: two vectors of `i32`.
+const V_STEP: usize = 8;
+
+/// The vertical binomial of five rows of `E` smoothed along the row
+/// (within `16 · 33 660`) on `[4, n − 4)` (`n ≥ 16`), eight columns a step
+/// ([`binomial_mla`]: exact, `V` within `26 880 · 255 < 2²³`), the last
+/// step ending at the row's end (it writes again, the same values, the
+/// columns the step before it wrote).
+#[target_feature(enable = "neon")]
+fn smooth_column_steps(rows: [&[i32]; 5], out: &mut [i32], n: usize) {
+    let Some(len) = n.checked_sub(8) else {
+        return;
+    };
+    let [a, b, c, d, e] = rows.map(|row| cut(row, 4, len));
+    let (Some(a), Some(b), Some(c), Some(d), Some(e), Some(out), Some(last)) =
+        (a, b, c, d, e, cut_mut(out, 4, len), len.checked_sub(V_STEP))
+    else {
+        return;
+    };
+    let taps = [a, b, c, d, e].map(<[i32]>::as_ptr);
+    let out = out.as_mut_ptr();
+    let step = |i: usize| {
+        for j in [i, i + 4] {
+            // SAFETY: `i ≤ last = len − 8`, so columns `j .. j + 4` lie in
+            // every row (each `len` long).
+            unsafe {
+                let [a, b, c, d, e] = taps.map(|row| i32::load(row.add(j)));
+                i32::store(out.add(j), binomial_mla(a, b, c, d, e));
+            }
+        }
+    };
+    for s in 0..len / V_STEP {
+        step(s * V_STEP);
+    }
+    if len % V_STEP != 0 {
+        step(last);
+    }
+}
+
+/// `(a + e) + 4·(b + d) + 6·c` of exact `i32` lanes, in two multiply-adds
+/// by a constant (four instructions): exact where the sum and every
+/// partial sum lie within `i32` (all of the engine's, within `2²⁸`).
+#[inline]
+#[target_feature(enable = "neon")]
+fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
+    vmlaq_n_s32(vmlaq_n_s32(vaddq_s32(a, e), vaddq_s32(b, d), 4), c, 6)
 }
 
 /// Columns a step of [`products_steps`]: eight, one vector of `i16`.
 const PRODUCTS_STEP: usize = 8;
 
 /// `stages::products_of` on the columns from `start` on, as many as the
-/// product rows hold (a multiple of [`PRODUCTS_STEP`]), eight a step:
+/// product rows hold (at least [`PRODUCTS_STEP`]), eight a step, the last
+/// step ending at the rows' end (it writes again, the same values, the
+/// columns the step before it wrote):
 ///
 /// | quantity | format, lanes | bound |
 /// |---|---|---|
@@ -182,10 +351,13 @@ fn products_steps(
         return;
     };
     let right_shift = vdupq_n_s64(-i64::from(shift));
-    for s in 0..len / PRODUCTS_STEP {
-        let i = s * PRODUCTS_STEP;
-        // SAFETY: columns `i .. i + 8` lie within `len` (and `i .. i + 10`
-        // within the wide rows, `len + 2`): the lengths checked above.
+    let Some(last) = len.checked_sub(PRODUCTS_STEP) else {
+        return;
+    };
+    let mut step = |i: usize| {
+        // SAFETY: `i ≤ last`, so columns `i .. i + 8` lie within `len`
+        // (and `i .. i + 10` within the wide rows, `len + 2`): the lengths
+        // checked above.
         unsafe {
             let taps = |row: &[u8]| -> [uint8x8_t; 3] {
                 [0, 1, 2].map(|k| vld1_u8(row.as_ptr().add(i + k)))
@@ -238,6 +410,12 @@ fn products_steps(
                 f32::store(yd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(y[h]), dn));
             }
         }
+    };
+    for s in 0..len / PRODUCTS_STEP {
+        step(s * PRODUCTS_STEP);
+    }
+    if len % PRODUCTS_STEP != 0 {
+        step(last);
     }
 }
 
