@@ -479,8 +479,8 @@ fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
 #[inline(always)]
 pub fn smooth<K: KernelSet>(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
     let [ex, ey] = e_smoothed;
-    K::smooth_column(ex, v.0, n);
-    K::smooth_column(ey, v.1, n);
+    vertical_binomial::<K, _>(ex, v.0, n, 4);
+    vertical_binomial::<K, _>(ey, v.1, n, 4);
     debug_assert!(
         v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
         "V beyond its bound"

@@ -3,7 +3,7 @@
 //! from 0 to [`LEN`] (both parities of the two-column loops, every position
 //! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
 //! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
-//! tail, bytes, products, `E` and `V` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! tail, bytes, products and `E` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
 //! (`scripts/embedded-check`). Targets without such loops pass trivially.
 //! Not part of the stable surface.
 
@@ -331,9 +331,9 @@ mod m4 {
 /// partial four-lane block) and every ring slot of an output row's first
 /// sums row; its bytes against the portable pixels', rows of every
 /// length from 0 to `LEN` (two sixteen-pixel steps and every remainder);
-/// its structure products, `E` smoothed along the row and `V`'s vertical
-/// binomial against the portable loops', rows of every length from 0 to
-/// `LEN` (five eight-column steps and every remainder).
+/// its structure products and `E` smoothed along the row against the
+/// portable loops', rows of every length from 0 to `LEN` (five
+/// eight-column steps and every remainder).
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 mod neon {
     use super::{LEN, Values, tail_params};
@@ -376,28 +376,8 @@ mod neon {
             rows += bytes(&mut values, len)?;
             rows += products(&mut values, len)?;
             rows += smoothed_e(&mut values, len)?;
-            rows += smooth_column(&mut values, len)?;
         }
         Ok(rows)
-    }
-
-    /// `V`'s vertical binomial (`KernelSet::smooth_column`) against the
-    /// portable loop's, `len` outputs from five rows `len + 8` wide of `E`
-    /// smoothed along the row, within its bound (`16 · 33 660`) and at its
-    /// ends one time in four.
-    fn smooth_column(values: &mut Values, len: usize) -> Result<usize, &'static str> {
-        const COLS: usize = LEN + 8;
-        let n = len + 8;
-        let rows: [[i32; COLS]; 5] =
-            core::array::from_fn(|_| core::array::from_fn(|_| values.within(16 * 33_660) as i32));
-        let rows = rows.each_ref().map(|r| &r[..n]);
-        let mut out = [[0i32; COLS]; 2];
-        Portable::smooth_column(rows, &mut out[0][..n], n);
-        Neon::smooth_column(rows, &mut out[1][..n], n);
-        if out[0] != out[1] {
-            return Err("neon: smooth_column");
-        }
-        Ok(1)
     }
 
     /// `E` smoothed along the row (`KernelSet::smoothed_e`) against the

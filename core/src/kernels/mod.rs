@@ -107,13 +107,6 @@ pub(crate) trait KernelSet: Copy {
         portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
     }
 
-    /// The vertical half of `V = G256 ⋆ E` on `[4, n − 4)` from the five
-    /// rows of `E` smoothed along the row centred on it (`stages::smooth`).
-    #[inline(always)]
-    fn smooth_column(rows: [&[i32]; 5], out: &mut [i32], n: usize) {
-        vertical_binomial::<Self, _>(rows, out, n, 4);
-    }
-
     /// The five structure products on columns `cols`, into product rows
     /// cut to them (`stages::portable_products_row`); `scratch` is the
     /// engine's free rows for intermediate values.

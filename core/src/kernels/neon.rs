@@ -100,18 +100,6 @@ impl KernelSet for Neon {
         }
     }
 
-    /// [`V_STEP`] columns a step in lanes ([`smooth_column_steps`]); rows
-    /// shorter than a step by the portable loop.
-    #[inline(always)]
-    fn smooth_column(rows: [&[i32]; 5], out: &mut [i32], n: usize) {
-        if n < V_STEP + 8 {
-            crate::stages::vertical_binomial::<Self, _>(rows, out, n, 4);
-        } else {
-            // SAFETY: NEON is in the build's features (the module's `cfg`).
-            unsafe { smooth_column_steps(rows, out, n) };
-        }
-    }
-
     /// [`PRODUCTS_STEP`] columns a step in lanes ([`products_steps`]);
     /// rows shorter than a step by the portable loop.
     #[inline(always)]
@@ -234,45 +222,6 @@ fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: u
     }
     if len % E_STEP != 0 {
         step(last, first(last));
-    }
-}
-
-/// Columns a step of [`smooth_column_steps`]: two vectors of `i32`.
-const V_STEP: usize = 8;
-
-/// The vertical binomial of five rows of `E` smoothed along the row
-/// (within `16 · 33 660`) on `[4, n − 4)` (`n ≥ 16`), eight columns a step
-/// ([`binomial_mla`]: exact, `V` within `26 880 · 255 < 2²³`), the last
-/// step ending at the row's end (it writes again, the same values, the
-/// columns the step before it wrote).
-#[target_feature(enable = "neon")]
-fn smooth_column_steps(rows: [&[i32]; 5], out: &mut [i32], n: usize) {
-    let Some(len) = n.checked_sub(8) else {
-        return;
-    };
-    let [a, b, c, d, e] = rows.map(|row| cut(row, 4, len));
-    let (Some(a), Some(b), Some(c), Some(d), Some(e), Some(out), Some(last)) =
-        (a, b, c, d, e, cut_mut(out, 4, len), len.checked_sub(V_STEP))
-    else {
-        return;
-    };
-    let taps = [a, b, c, d, e].map(<[i32]>::as_ptr);
-    let out = out.as_mut_ptr();
-    let step = |i: usize| {
-        for j in [i, i + 4] {
-            // SAFETY: `i ≤ last = len − 8`, so columns `j .. j + 4` lie in
-            // every row (each `len` long).
-            unsafe {
-                let [a, b, c, d, e] = taps.map(|row| i32::load(row.add(j)));
-                i32::store(out.add(j), binomial_mla(a, b, c, d, e));
-            }
-        }
-    };
-    for s in 0..len / V_STEP {
-        step(s * V_STEP);
-    }
-    if len % V_STEP != 0 {
-        step(last);
     }
 }
 
@@ -491,16 +440,6 @@ impl Blocked for Neon {
     }
 }
 
-/// `a + 4b + 6c + 4d + e`, as `4(b + c + d) + 2c + a + e` (exact in `i32`:
-/// every sum of the engine's is within `2²⁸`).
-#[inline]
-#[target_feature(enable = "neon")]
-fn binomial(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
-    let inner = vshlq_n_s32::<2>(vaddq_s32(vaddq_s32(b, c), d));
-    let outer = vaddq_s32(vaddq_s32(vaddq_s32(c, c), a), e);
-    vaddq_s32(inner, outer)
-}
-
 /// `((a + e) + (b + d)·4) + c·6`, rounded as `Sample::binomial` for `f32`
 /// (module doc: the one FMA is exact).
 #[inline]
@@ -516,7 +455,7 @@ fn binomial_f(
     vaddq_f32(sum, vmulq_f32(c, vdupq_n_f32(6.0)))
 }
 
-/// Exact `i32` sums, four a vector ([`binomial`]).
+/// Exact `i32` sums, four a vector ([`binomial_mla`]).
 impl Lanes<BLOCK> for i32 {
     type Vector = int32x4_t;
 
@@ -537,7 +476,7 @@ impl Lanes<BLOCK> for i32 {
     #[inline]
     #[target_feature(enable = "neon")]
     unsafe fn binomial_lanes([a, b, c, d, e]: [int32x4_t; 5]) -> int32x4_t {
-        binomial(a, b, c, d, e)
+        binomial_mla(a, b, c, d, e)
     }
 }
 
