@@ -225,6 +225,16 @@ where
 /// Rows of one channel pair (x, y).
 pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 
+/// `p0` and `d = p1 − p0` (SPEC §2) of a row's pixels inside the frame,
+/// as far as the shortest of the four rows goes (`KernelSet::load_pixels`).
+#[inline(always)]
+pub(crate) fn load_pixels_of([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16]) {
+    for (((p, dd), &a), &b) in p.iter_mut().zip(d.iter_mut()).zip(prev).zip(next) {
+        *p = a;
+        *dd = i16::from(b) - i16::from(a);
+    }
+}
+
 /// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it.
 ///
 /// Separable forms (rows ⊗ columns, correlation):

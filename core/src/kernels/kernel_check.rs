@@ -3,7 +3,7 @@
 //! from 0 to [`LEN`] (both parities of the two-column loops, every position
 //! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
 //! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
-//! tail, bytes, products and `E` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! tail, bytes, products, `E` and the rows of `d` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
 //! (`scripts/embedded-check`). Targets without such loops pass trivially.
 //! Not part of the stable surface.
 
@@ -331,8 +331,9 @@ mod m4 {
 /// partial four-lane block) and every ring slot of an output row's first
 /// sums row; its bytes against the portable pixels', rows of every
 /// length from 0 to `LEN` (two sixteen-pixel steps and every remainder);
-/// its structure products and `E` smoothed along the row against the
-/// portable loops', rows of every length from 0 to `LEN` (five
+/// its rows of `p0` and `d`, `E`'s vertical parts, the structure
+/// products and `E` smoothed along the row against the portable loops',
+/// rows of every length from 0 to `LEN` (two sixteen-column or five
 /// eight-column steps and every remainder).
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 mod neon {
@@ -344,7 +345,7 @@ mod neon {
     use crate::sink::portable_rgb_tail;
     use crate::stages::{
         DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, ScratchRows,
-        vertical_parts_of,
+        load_pixels_of, vertical_parts_of,
     };
     use crate::tail::{TailConstants, TailOut};
     use crate::{ByteScale, Pixels};
@@ -376,8 +377,38 @@ mod neon {
             rows += bytes(&mut values, len)?;
             rows += products(&mut values, len)?;
             rows += smoothed_e(&mut values, len)?;
+            rows += rows_of_d(&mut values, len)?;
         }
         Ok(rows)
+    }
+
+    /// `p0` and `d` of a row (`KernelSet::load_pixels`) from bytes 0 to
+    /// 255, and `E`'s vertical parts (`KernelSet::vertical_parts`) from
+    /// five rows of `d` within ±255 (at its ends one time in four),
+    /// against the portable loops', `len` columns.
+    fn rows_of_d(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let frames: [[u8; LEN]; 2] =
+            core::array::from_fn(|_| core::array::from_fn(|_| values.next() as u8));
+        let [prev, next] = frames.each_ref().map(|r| &r[..len]);
+        let (mut p, mut d) = ([[0u8; LEN]; 2], [[0i16; LEN]; 2]);
+        let ([p_want, p_got], [d_want, d_got]) = (&mut p, &mut d);
+        load_pixels_of([prev, next], &mut p_want[..len], &mut d_want[..len]);
+        Neon::load_pixels([prev, next], &mut p_got[..len], &mut d_got[..len]);
+        if p[0] != p[1] || d[0] != d[1] {
+            return Err("neon: load_pixels");
+        }
+        let d: [[i16; LEN]; 5] =
+            core::array::from_fn(|_| core::array::from_fn(|_| values.within(255) as i16));
+        let d = d.each_ref().map(|r| &r[..len]);
+        let mut parts = [[[0i16; LEN]; 4]; 2];
+        let [want, got] = &mut parts;
+        let [v1, v2, v3, v4] = want.each_mut().map(|r| &mut r[..len]);
+        vertical_parts_of(d, v1, v2, v3, v4);
+        Neon::vertical_parts(d, got.each_mut().map(|r| &mut r[..len]));
+        if parts[0] != parts[1] {
+            return Err("neon: vertical_parts");
+        }
+        Ok(2)
     }
 
     /// `E` smoothed along the row (`KernelSet::smoothed_e`) against the

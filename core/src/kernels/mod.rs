@@ -15,9 +15,10 @@
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
 //!   in a layout of its own (`blocked`, shared with `neon`), which it
 //!   names as its [`KernelSet::Sums`];
-//! - `neon`: the same layout and tail, and the bytes, in NEON lanes for
-//!   aarch64, fixed at compile time, held equal to the portable sums, tail
-//!   and bytes by `kernel_check` under `qemu-aarch64`.
+//! - `neon`: the same layout and tail, and the bytes, the rows of `d`,
+//!   `E`, its smoothing along the row and the structure products, in NEON
+//!   lanes for aarch64, fixed at compile time, held equal to their
+//!   portable twins by `kernel_check` under `qemu-aarch64`.
 //!
 //! [`fpu`] holds the two per-target instructions the portable code itself
 //! calls (the `f32` square root, the byte of a clamped value).
@@ -95,6 +96,13 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn vertical_parts(d: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
         vertical_parts_of(d, v1, v2, v3, v4);
+    }
+
+    /// `p0` and `d = p1 − p0` of the frame's columns a window row holds:
+    /// `p` and `d` as far as the shortest of the four rows goes.
+    #[inline(always)]
+    fn load_pixels([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16]) {
+        crate::stages::load_pixels_of([prev, next], p, d);
     }
 
     /// `E` smoothed along the row (the horizontal half of `V`) on `[4, n −

@@ -1,4 +1,4 @@
-//! The structure sums, the tail and the bytes in NEON lanes, through intrinsics, for
+//! The engine's row loops in NEON lanes, through intrinsics, for
 //! aarch64 (companion boards: Raspberry Pi 4/5, Jetson Orin's CPU). NEON is
 //! part of every aarch64 target this builds for (`target_feature = "neon"`),
 //! so the set is fixed at compile time: the firmware's and the host's
@@ -11,6 +11,18 @@
 //! per channel) read 25 rows through 25 pointers and took the sums to
 //! memory and back between the vertical `G` and the tail.
 //!
+//! The stages before the sums take their narrowest exact lanes: `p0` and
+//! `d` sixteen pixels a step; `E`'s vertical parts, the Sobel gradients
+//! and `E`'s horizontal parts eight columns a step in `i16`; `E` widened
+//! to `i32` and smoothed along the row without leaving the registers
+//! (the portable pass wrote it to a row and read it back at five taps);
+//! the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
+//! portable loop sums it exactly in two 32-bit halves. Each of these loops
+//! ends a row with one more step that ends at the row's end, over columns
+//! the step before it already wrote (the same values again), where the
+//! portable loops finish one column at a time; rows shorter than a step
+//! take the portable loop.
+//!
 //! The representation's bytes take sixteen pixels a step: both
 //! magnitudes' bytes in lanes and `fⁿ`'s, interleaved by one `ST3`, where
 //! the portable batches went through the stack and an interleaving loop
@@ -22,14 +34,16 @@
 //! one fused multiply-add is exact: in an `f32` binomial `((a + e) + (b +
 //! d)·4) + c·6`, `(b + d)·4` is exact (a power of two, no overflow, no
 //! subnormal: the products are 0 or at least 2⁻²⁰), so `fma(a + e, b + d,
-//! 4)` rounds the same sum once, as the two steps do. `FMAX` takes the
+//! 4)` rounds the same sum once, as the two steps do. Integer binomials
+//! take two multiply-adds by a constant (`MLA`), exact as every sum is.
+//! `FMAX` takes the
 //! determinant's clamp: it differs from the portable select only on NaNs
 //! and signed zeros, and the determinant is neither (`tail`'s table).
 //!
 //! `unsafe` here: the calls of the `#[target_feature(enable = "neon")]`
 //! functions, which the module's `cfg` (NEON in the build's features)
-//! makes sound, and the loads and stores of four (bytes: sixteen) lanes,
-//! each within a row whose length is checked once a row.
+//! makes sound, and the loads and stores of four to sixteen lanes, each
+//! within a row whose length is checked once a row.
 #![allow(unsafe_code)]
 
 use core::arch::aarch64::{
@@ -46,7 +60,10 @@ use core::arch::aarch64::{
     vmovl_s16, vmull_high_n_s32, vmull_high_s16, vmull_n_s32, vmull_s16, vreinterpretq_s16_u16,
     vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
 };
-use core::arch::aarch64::{vextq_s32, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vsubq_s16};
+use core::arch::aarch64::{
+    vextq_s32, vget_low_u8, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vst1q_s16, vst1q_u8,
+    vsubl_high_u8, vsubq_s16,
+};
 use core::ops::Range;
 
 use super::KernelSet;
@@ -54,7 +71,8 @@ use super::blocked::{
     self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
 };
 use crate::stages::{
-    Pair, ProductRows, ResidualInputs, cut, cut_mut, portable_products_row, portable_smoothed_e,
+    Pair, ProductRows, ResidualInputs, cut, cut_mut, load_pixels_of, portable_products_row,
+    portable_smoothed_e, vertical_parts_of,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -87,6 +105,32 @@ impl KernelSet for Neon {
         Self::rgb_pixels(d_rest, c_rest, l_rest, scales, o_rest);
     }
 
+    /// Sixteen pixels a step in lanes ([`load_pixels_steps`]); rows
+    /// shorter than a step by the portable loop.
+    #[inline(always)]
+    fn load_pixels(rows: [&[u8]; 2], p: &mut [u8], d: &mut [i16]) {
+        let len = p.len().min(d.len()).min(rows[0].len()).min(rows[1].len());
+        if len < LOAD_STEP {
+            load_pixels_of(rows, p, d);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { load_pixels_steps(rows, p, d, len) };
+        }
+    }
+
+    /// [`PARTS_STEP`] columns a step in lanes ([`vertical_parts_steps`]);
+    /// rows shorter than a step by the portable loop.
+    #[inline(always)]
+    fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) {
+        if d[0].len() < PARTS_STEP {
+            let [v1, v2, v3, v4] = v;
+            vertical_parts_of(d, v1, v2, v3, v4);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { vertical_parts_steps(d, v) };
+        }
+    }
+
     /// [`E_STEP`] columns a step in lanes ([`smoothed_e_steps`]), `E`
     /// itself never leaving them (`e` is left as it was); rows shorter
     /// than a step by the portable loops.
@@ -111,6 +155,99 @@ impl KernelSet for Neon {
             // SAFETY: NEON is in the build's features (the module's `cfg`).
             unsafe { products_steps(input, ints, floats, cols.start) };
         }
+    }
+}
+
+/// Pixels a step of [`load_pixels_steps`]: sixteen bytes.
+const LOAD_STEP: usize = 16;
+
+/// `p0` and `d = p1 − p0` (`u8`; `i16` from `USUBL`, exact within ±255)
+/// of the first `len ≥ 16` pixels, sixteen a step, the last step ending at
+/// `len` (it writes again, the same values, the pixels the step before it
+/// wrote).
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn load_pixels_steps([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16], len: usize) {
+    let (Some(prev), Some(next), Some(p), Some(d), Some(last)) = (
+        prev.get(..len),
+        next.get(..len),
+        p.get_mut(..len),
+        d.get_mut(..len),
+        len.checked_sub(LOAD_STEP),
+    ) else {
+        return;
+    };
+    let (p, d) = (p.as_mut_ptr(), d.as_mut_ptr());
+    let step = |i: usize| {
+        // SAFETY: `i ≤ last = len − 16`: pixels `i .. i + 16` lie in
+        // every row.
+        unsafe {
+            let (a, b) = (
+                vld1q_u8(prev.as_ptr().add(i)),
+                vld1q_u8(next.as_ptr().add(i)),
+            );
+            vst1q_u8(p.add(i), a);
+            vst1q_s16(
+                d.add(i),
+                vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(b), vget_low_u8(a))),
+            );
+            vst1q_s16(d.add(i + 8), vreinterpretq_s16_u16(vsubl_high_u8(b, a)));
+        }
+    };
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(LOAD_STEP) {
+        step((s * LOAD_STEP).min(last));
+    }
+}
+
+/// Columns a step of [`vertical_parts_steps`]: eight, one vector of `i16`.
+const PARTS_STEP: usize = 8;
+
+/// `E`'s four vertical parts (`stages::vertical_parts_of`, term for term)
+/// of rows at least eight long, eight columns a step, the last step ending
+/// at the rows' end (it writes again, the same values, the columns the
+/// step before it wrote): from `d` (i16, ±255), `v1 = b + 4c + d`
+/// (±1530), `v2 = (a + e) + 3(b + d) + 4c` (±3060), `v3 = d − b` (±510),
+/// `v4 = (d + e) − (a + b)` (±1020), every partial sum within `i16`. Exact.
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn vertical_parts_steps(rows: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
+    let len = rows[0].len();
+    let [a, b, c, d, e] = rows.map(|row| row.get(..len));
+    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (a, b, c, d, e) else {
+        return;
+    };
+    let (Some(v1), Some(v2), Some(v3), Some(v4), Some(last)) = (
+        v1.get_mut(..len),
+        v2.get_mut(..len),
+        v3.get_mut(..len),
+        v4.get_mut(..len),
+        len.checked_sub(PARTS_STEP),
+    ) else {
+        return;
+    };
+    let taps = [a, b, c, d, e].map(<[i16]>::as_ptr);
+    let out = [v1, v2, v3, v4].map(<[i16]>::as_mut_ptr);
+    let step = |i: usize| {
+        // SAFETY: `i ≤ last = len − 8`: columns `i .. i + 8` lie in every
+        // row.
+        unsafe {
+            let [a, b, c, d, e] = taps.map(|row| vld1q_s16(row.add(i)));
+            let b_d = vaddq_s16(b, d);
+            let parts = [
+                vmlaq_n_s16(b_d, c, 4),
+                vmlaq_n_s16(vmlaq_n_s16(vaddq_s16(a, e), b_d, 3), c, 4),
+                vsubq_s16(d, b),
+                vsubq_s16(vaddq_s16(d, e), vaddq_s16(a, b)),
+            ];
+            for (row, part) in out.iter().zip(parts) {
+                vst1q_s16(row.add(i), part);
+            }
+        }
+    };
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(PARTS_STEP) {
+        step((s * PARTS_STEP).min(last));
     }
 }
 
@@ -181,6 +318,7 @@ fn smooth_e(left: int32x4_t, right: int32x4_t) -> int32x4_t {
 /// (the first step's and the last's from one more [`e_at`]); the last
 /// step ends at the row's end (it writes again, the same values, the
 /// columns the step before it wrote).
+#[inline(never)]
 #[target_feature(enable = "neon")]
 fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: usize) {
     let (Some(v1), Some(v2), Some(v3), Some(v4)) =
@@ -220,7 +358,7 @@ fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: u
     for s in 0..len / E_STEP {
         left = step(s * E_STEP, left);
     }
-    if len % E_STEP != 0 {
+    if !len.is_multiple_of(E_STEP) {
         step(last, first(last));
     }
 }
@@ -261,6 +399,7 @@ const PRODUCTS_STEP: usize = 8;
 /// the bounds); `SCVTF` with fraction bits rounds `Dn′ / 2²⁰` once, which
 /// is `Dn′ as f32 · 2⁻²⁰` (scaling by a power of two is exact: no overflow,
 /// no subnormal), and each `f32` product rounds once, as the portable.
+#[inline(never)]
 #[target_feature(enable = "neon")]
 fn products_steps(
     input: &ResidualInputs<'_>,
@@ -360,11 +499,9 @@ fn products_steps(
             }
         }
     };
-    for s in 0..len / PRODUCTS_STEP {
-        step(s * PRODUCTS_STEP);
-    }
-    if len % PRODUCTS_STEP != 0 {
-        step(last);
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(PRODUCTS_STEP) {
+        step((s * PRODUCTS_STEP).min(last));
     }
 }
 
