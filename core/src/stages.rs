@@ -235,7 +235,9 @@ pub(crate) fn load_pixels_of([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i1
     }
 }
 
-/// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it.
+/// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it, and `E`
+/// smoothed along the row on `[4, n−4)` (`KernelSet::smoothed_e`: a set
+/// may keep `E` itself in registers and leave `e` as it was).
 ///
 /// Separable forms (rows ⊗ columns, correlation):
 /// `Kbx3 = [1 4 1]ᵀ⊗[−1 0 1]`, `Box⋆Sobx = [1 3 4 3 1]ᵀ⊗[−1 −1 0 1 1]`,
