@@ -522,7 +522,7 @@ impl<K: KernelSet> Pass<'_, K> {
         let Window { x_first, n, t, .. } = *self.window;
         self.window.t += 1;
         let rows = &mut self.rows;
-        load_row(
+        load_row::<K>(
             prev,
             next,
             x_first,
@@ -663,7 +663,14 @@ fn first_mut<T>(row: &mut [T], width: usize) -> &mut [T] {
 /// Window columns `[x_first, x_first + n)` of both rows, clamped into the
 /// frame (SPEC §2), as `p0` and `d = p1 − p0`.
 #[inline(always)]
-fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d: &mut [i16]) {
+fn load_row<K: KernelSet>(
+    prev: &[u8],
+    next: &[u8],
+    x_first: isize,
+    n: usize,
+    p0: &mut [u8],
+    d: &mut [i16],
+) {
     let width = prev.len().min(next.len());
     let (Some(&first), Some(&last)) = (prev.first(), prev.get(width.wrapping_sub(1))) else {
         return;
@@ -688,15 +695,7 @@ fn load_row(prev: &[u8], next: &[u8], x_first: isize, n: usize, p0: &mut [u8], d
         prev.get(start..start + inside).unwrap_or(&[]),
         next.get(start..start + inside).unwrap_or(&[]),
     );
-    for (((p, dd), &a), &b) in p_rest
-        .iter_mut()
-        .zip(d_rest.iter_mut())
-        .zip(src_p)
-        .zip(src_n)
-    {
-        *p = a;
-        *dd = i16::from(b) - i16::from(a);
-    }
+    K::load_pixels([src_p, src_n], p_rest, d_rest);
     let right = left + inside..n;
     if let (Some(p), Some(dd)) = (p0.get_mut(right.clone()), d.get_mut(right)) {
         p.fill(last);

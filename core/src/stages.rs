@@ -225,7 +225,19 @@ where
 /// Rows of one channel pair (x, y).
 pub type Pair<'a, T> = (&'a mut [T], &'a mut [T]);
 
-/// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it.
+/// `p0` and `d = p1 − p0` (SPEC §2) of a row's pixels inside the frame,
+/// as far as the shortest of the four rows goes (`KernelSet::load_pixels`).
+#[inline(always)]
+pub(crate) fn load_pixels_of([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16]) {
+    for (((p, dd), &a), &b) in p.iter_mut().zip(d.iter_mut()).zip(prev).zip(next) {
+        *p = a;
+        *dd = i16::from(b) - i16::from(a);
+    }
+}
+
+/// `E` (x, y) on `[2, n−2)` from the five `d` rows centred on it, and `E`
+/// smoothed along the row on `[4, n−4)` (`KernelSet::smoothed_e`: a set
+/// may keep `E` itself in registers and leave `e` as it was).
 ///
 /// Separable forms (rows ⊗ columns, correlation):
 /// `Kbx3 = [1 4 1]ᵀ⊗[−1 0 1]`, `Box⋆Sobx = [1 3 4 3 1]ᵀ⊗[−1 −1 0 1 1]`,
@@ -242,10 +254,21 @@ pub fn boundary_minus_domain<K: KernelSet>(
 ) {
     let [v1, v2, v3, v4] = vert;
     vertical_parts::<K>(d, v1, v2, v3, v4, span(n, 0));
-    let (ex, ey) = e;
+    K::smoothed_e([v1, v2, v3, v4], e, e_smoothed, n);
+}
+
+/// `E` on `[2, n−2)` (into `e`) from its four vertical parts, and the
+/// horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
+/// vertical one) on `[4, n−4)`: the ring keeps `E` smoothed along its row.
+/// The portable `KernelSet::smoothed_e`.
+#[inline(always)]
+pub(crate) fn portable_smoothed_e<K: KernelSet>(
+    [v1, v2, v3, v4]: [&[i16]; 4],
+    (ex, ey): Pair<'_, i32>,
+    e_smoothed: Pair<'_, i32>,
+    n: usize,
+) {
     horizontal_parts([v1, v2, v3, v4], ex, ey, span(n, 2));
-    // The horizontal half of `V = G256 ⋆ E` right away (`smooth` takes the
-    // vertical one): the ring keeps `E` smoothed along its row.
     horizontal_binomial::<K, _>(ex, e_smoothed.0, n, 4);
     horizontal_binomial::<K, _>(ey, e_smoothed.1, n, 4);
 }

@@ -3,7 +3,7 @@
 //! from 0 to [`LEN`] (both parities of the two-column loops, every position
 //! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
 //! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
-//! tail and bytes (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! tail, bytes, products, `E` and the rows of `d` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
 //! (`scripts/embedded-check`). Targets without such loops pass trivially.
 //! Not part of the stable surface.
 
@@ -329,8 +329,12 @@ mod m4 {
 /// each output row's vertical `G`, solve, magnitudes, extremes and fields,
 /// for outputs of every length from 0 to `LEN` (every position of a
 /// partial four-lane block) and every ring slot of an output row's first
-/// sums row; and its bytes against the portable pixels', rows of every
-/// length from 0 to `LEN` (two sixteen-pixel steps and every remainder).
+/// sums row; its bytes against the portable pixels', rows of every
+/// length from 0 to `LEN` (two sixteen-pixel steps and every remainder);
+/// its rows of `p0` and `d`, `E`'s vertical parts, the structure
+/// products and `E` smoothed along the row against the portable loops',
+/// rows of every length from 0 to `LEN` (two sixteen-column or five
+/// eight-column steps and every remainder).
 #[cfg(all(target_arch = "aarch64", target_feature = "neon"))]
 mod neon {
     use super::{LEN, Values, tail_params};
@@ -339,7 +343,10 @@ mod neon {
     use crate::ring::take_rows;
     use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
     use crate::sink::portable_rgb_tail;
-    use crate::stages::{DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS};
+    use crate::stages::{
+        DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, ScratchRows,
+        load_pixels_of, vertical_parts_of,
+    };
     use crate::tail::{TailConstants, TailOut};
     use crate::{ByteScale, Pixels};
     use crate::{Config, ExtremesSink};
@@ -368,6 +375,134 @@ mod neon {
                 }
             }
             rows += bytes(&mut values, len)?;
+            rows += products(&mut values, len)?;
+            rows += smoothed_e(&mut values, len)?;
+            rows += rows_of_d(&mut values, len)?;
+        }
+        Ok(rows)
+    }
+
+    /// `p0` and `d` of a row (`KernelSet::load_pixels`) from bytes 0 to
+    /// 255, and `E`'s vertical parts (`KernelSet::vertical_parts`) from
+    /// five rows of `d` within ±255 (at its ends one time in four),
+    /// against the portable loops', `len` columns.
+    fn rows_of_d(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let frames: [[u8; LEN]; 2] =
+            core::array::from_fn(|_| core::array::from_fn(|_| values.next() as u8));
+        let [prev, next] = frames.each_ref().map(|r| &r[..len]);
+        let (mut p, mut d) = ([[0u8; LEN]; 2], [[0i16; LEN]; 2]);
+        let ([p_want, p_got], [d_want, d_got]) = (&mut p, &mut d);
+        load_pixels_of([prev, next], &mut p_want[..len], &mut d_want[..len]);
+        Neon::load_pixels([prev, next], &mut p_got[..len], &mut d_got[..len]);
+        if p[0] != p[1] || d[0] != d[1] {
+            return Err("neon: load_pixels");
+        }
+        let d: [[i16; LEN]; 5] =
+            core::array::from_fn(|_| core::array::from_fn(|_| values.within(255) as i16));
+        let d = d.each_ref().map(|r| &r[..len]);
+        let mut parts = [[[0i16; LEN]; 4]; 2];
+        let [want, got] = &mut parts;
+        let [v1, v2, v3, v4] = want.each_mut().map(|r| &mut r[..len]);
+        vertical_parts_of(d, v1, v2, v3, v4);
+        Neon::vertical_parts(d, got.each_mut().map(|r| &mut r[..len]));
+        if parts[0] != parts[1] {
+            return Err("neon: vertical_parts");
+        }
+        Ok(2)
+    }
+
+    /// `E` smoothed along the row (`KernelSet::smoothed_e`) against the
+    /// portable loops', `len` outputs from vertical parts `len + 8` wide,
+    /// made (`stages::vertical_parts_of`) from five rows of `d` within
+    /// ±255, at its ends one time in four.
+    fn smoothed_e(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        const COLS: usize = LEN + 8;
+        let n = len + 8;
+        let d: [[i16; COLS]; 5] =
+            core::array::from_fn(|_| core::array::from_fn(|_| values.within(255) as i16));
+        let mut parts = [[0i16; COLS]; 4];
+        let [v1, v2, v3, v4] = parts.each_mut().map(|r| &mut r[..n]);
+        vertical_parts_of(d.each_ref().map(|r| &r[..n]), v1, v2, v3, v4);
+        let vert = parts.each_ref().map(|r| &r[..n]);
+        let mut out = [[[0i32; COLS]; 2]; 2];
+        for (neon, [sx, sy]) in [false, true].into_iter().zip(out.each_mut()) {
+            let (mut ex, mut ey) = ([0i32; COLS], [0i32; COLS]);
+            let e = (&mut ex[..n], &mut ey[..n]);
+            if neon {
+                Neon::smoothed_e(vert, e, (&mut sx[..n], &mut sy[..n]), n);
+            } else {
+                Portable::smoothed_e(vert, e, (&mut sx[..n], &mut sy[..n]), n);
+            }
+        }
+        if out[0] != out[1] {
+            return Err("neon: smoothed_e");
+        }
+        Ok(1)
+    }
+
+    /// The structure products (`KernelSet::products_row`) against the
+    /// portable ones at the smallest and largest residual shifts and the
+    /// SPEC's default scale: `p0` from 0 to 255, `d` within ±255 and `V`
+    /// within half its bound (so that `Q` reaches its own), each at its
+    /// ends one time in four; `len` columns from column 5 of a window
+    /// `len + 10` wide, as the engine's.
+    fn products(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        const COLS: usize = LEN + 10;
+        let n = len + 10;
+        let mut rows = 0;
+        for (num, den) in [(1, 1), (1, 255), (1, 699_050)] {
+            let Ok(scale) = crate::IntensityScale::new(num, den) else {
+                return Err("neon: products' scale");
+            };
+            // An admissible λ at this scale (`κ` and `σ` do not depend on it).
+            let s = f64::from(num) / f64::from(den);
+            let lambda = fixed::types::U32F32::from_num(1000.0 * s * s / 65_536.0)
+                .max(fixed::types::U32F32::DELTA);
+            let Ok(config) = Config::new(8, 8, crate::Params { scale, lambda }) else {
+                return Err("neon: products' configuration");
+            };
+            let mut v_row =
+                || -> [i32; COLS] { core::array::from_fn(|_| values.within(6_854_400 / 2) as i32) };
+            let (vx, vy) = (v_row(), [v_row(), v_row(), v_row()]);
+            let p0: [[u8; COLS]; 3] = core::array::from_fn(|_| {
+                core::array::from_fn(|_| (values.within(128) + 127).clamp(0, 255) as u8)
+            });
+            let d: [i16; COLS] = core::array::from_fn(|_| values.within(255) as i16);
+            let input = ResidualInputs {
+                vx: &vx[..n],
+                vy: vy.each_ref().map(|r| &r[..n]),
+                p0: p0.each_ref().map(|r| &r[..n]),
+                d: &d[..n],
+                kappa: config.kappa_split(),
+                shift: config.dn_shift,
+            };
+            let (mut ints, mut floats) = ([[[0i32; LEN]; INT_CHANNELS]; 2], [[[0f32; LEN]; 2]; 2]);
+            let [ints_p, ints_n] = &mut ints;
+            let [floats_p, floats_n] = &mut floats;
+            for (neon, ints, floats) in [(false, ints_p, floats_p), (true, ints_n, floats_n)] {
+                let (mut gx, mut gy, mut high, mut low) =
+                    ([0i16; LEN], [0i16; LEN], [0; LEN], [0; LEN]);
+                let rows = ProductRows {
+                    ints: ints.each_mut().map(|r| &mut r[..len]),
+                    floats: floats.each_mut().map(|r| &mut r[..len]),
+                    scratch: ScratchRows {
+                        gx: &mut gx[..len],
+                        gy: &mut gy[..len],
+                        high: &mut high[..len],
+                        low: &mut low[..len],
+                    },
+                };
+                if neon {
+                    Neon::products_row(&input, rows, 5..5 + len);
+                } else {
+                    Portable::products_row(&input, rows, 5..5 + len);
+                }
+            }
+            let bits = |rows: &[[f32; LEN]; 2]| rows.map(|r| r.map(f32::to_bits));
+            if ints[0] != ints[1] || bits(&floats[0]) != bits(&floats[1]) {
+                return Err("neon: products_row");
+            }
+            rows += 1;
         }
         Ok(rows)
     }

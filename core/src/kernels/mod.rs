@@ -15,9 +15,10 @@
 //!   portable pass by `tests/tests/simd.rs`. It keeps the structure sums
 //!   in a layout of its own (`blocked`, shared with `neon`), which it
 //!   names as its [`KernelSet::Sums`];
-//! - `neon`: the same layout and tail, and the bytes, in NEON lanes for
-//!   aarch64, fixed at compile time, held equal to the portable sums, tail
-//!   and bytes by `kernel_check` under `qemu-aarch64`.
+//! - `neon`: the same layout and tail, and the bytes, the rows of `d`,
+//!   `E`, its smoothing along the row and the structure products, in NEON
+//!   lanes for aarch64, fixed at compile time, held equal to their
+//!   portable twins by `kernel_check` under `qemu-aarch64`.
 //!
 //! [`fpu`] holds the two per-target instructions the portable code itself
 //! calls (the `f32` square root, the byte of a clamped value).
@@ -47,9 +48,9 @@ use core::ops::Range;
 use crate::ring::RowRing;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
-    Binomial, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, binomial_of,
-    horizontal_binomial, portable_products_row, running_binomial, sliding_binomial,
-    vertical_binomial, vertical_parts_of,
+    Binomial, FLOAT_CHANNELS, INT_CHANNELS, Pair, ProductRows, ResidualInputs, binomial_of,
+    horizontal_binomial, portable_products_row, portable_smoothed_e, running_binomial,
+    sliding_binomial, vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink, Pixels};
@@ -95,6 +96,23 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn vertical_parts(d: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
         vertical_parts_of(d, v1, v2, v3, v4);
+    }
+
+    /// `p0` and `d = p1 − p0` of the frame's columns a window row holds:
+    /// `p` and `d` as far as the shortest of the four rows goes.
+    #[inline(always)]
+    fn load_pixels([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16]) {
+        crate::stages::load_pixels_of([prev, next], p, d);
+    }
+
+    /// `E` smoothed along the row (the horizontal half of `V`) on `[4, n −
+    /// 4)` into `e_smoothed`, from `E`'s four vertical parts (window
+    /// columns, valid on `[0, n)`): `stages::portable_smoothed_e`, which
+    /// also leaves `E` itself in `e` on `[2, n − 2)`, rows a set may use
+    /// as scratch instead (nothing reads them after).
+    #[inline(always)]
+    fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
+        portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
     }
 
     /// The five structure products on columns `cols`, into product rows

@@ -1,4 +1,4 @@
-//! The structure sums, the tail and the bytes in NEON lanes, through intrinsics, for
+//! The engine's row loops in NEON lanes, through intrinsics, for
 //! aarch64 (companion boards: Raspberry Pi 4/5, Jetson Orin's CPU). NEON is
 //! part of every aarch64 target this builds for (`target_feature = "neon"`),
 //! so the set is fixed at compile time: the firmware's and the host's
@@ -11,6 +11,18 @@
 //! per channel) read 25 rows through 25 pointers and took the sums to
 //! memory and back between the vertical `G` and the tail.
 //!
+//! The stages before the sums take their narrowest exact lanes: `p0` and
+//! `d` sixteen pixels a step; `E`'s vertical parts, the Sobel gradients
+//! and `E`'s horizontal parts eight columns a step in `i16`; `E` widened
+//! to `i32` and smoothed along the row without leaving the registers
+//! (the portable pass wrote it to a row and read it back at five taps);
+//! the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
+//! portable loop sums it exactly in two 32-bit halves. Each of these loops
+//! ends a row with one more step that ends at the row's end, over columns
+//! the step before it already wrote (the same values again), where the
+//! portable loops finish one column at a time; rows shorter than a step
+//! take the portable loop.
+//!
 //! The representation's bytes take sixteen pixels a step: both
 //! magnitudes' bytes in lanes and `fⁿ`'s, interleaved by one `ST3`, where
 //! the portable batches went through the stack and an interleaving loop
@@ -22,14 +34,16 @@
 //! one fused multiply-add is exact: in an `f32` binomial `((a + e) + (b +
 //! d)·4) + c·6`, `(b + d)·4` is exact (a power of two, no overflow, no
 //! subnormal: the products are 0 or at least 2⁻²⁰), so `fma(a + e, b + d,
-//! 4)` rounds the same sum once, as the two steps do. `FMAX` takes the
+//! 4)` rounds the same sum once, as the two steps do. Integer binomials
+//! take two multiply-adds by a constant (`MLA`), exact as every sum is.
+//! `FMAX` takes the
 //! determinant's clamp: it differs from the portable select only on NaNs
 //! and signed zeros, and the determinant is neither (`tail`'s table).
 //!
 //! `unsafe` here: the calls of the `#[target_feature(enable = "neon")]`
 //! functions, which the module's `cfg` (NEON in the build's features)
-//! makes sound, and the loads and stores of four (bytes: sixteen) lanes,
-//! each within a row whose length is checked once a row.
+//! makes sound, and the loads and stores of four to sixteen lanes, each
+//! within a row whose length is checked once a row.
 #![allow(unsafe_code)]
 
 use core::arch::aarch64::{
@@ -40,9 +54,25 @@ use core::arch::aarch64::{
     vsqrtq_f32, vst1q_f32, vst1q_s32, vst3q_u8, vsubq_f32,
 };
 
+use core::arch::aarch64::{
+    int16x8_t, uint8x8_t, vaddq_s16, vcvtq_n_f32_s32, vdupq_n_s64, vget_low_s16, vget_low_s32,
+    vld1_u8, vld1q_s16, vmlaq_n_s16, vmlsl_high_s32, vmlsl_s32, vmlsq_n_s32, vmovl_high_s16,
+    vmovl_s16, vmull_high_n_s32, vmull_high_s16, vmull_n_s32, vmull_s16, vreinterpretq_s16_u16,
+    vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
+};
+use core::arch::aarch64::{
+    vextq_s32, vget_low_u8, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vst1q_s16, vst1q_u8,
+    vsubl_high_u8, vsubq_s16,
+};
+use core::ops::Range;
+
 use super::KernelSet;
 use super::blocked::{
     self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
+};
+use crate::stages::{
+    Pair, ProductRows, ResidualInputs, cut, cut_mut, load_pixels_of, portable_products_row,
+    portable_smoothed_e, vertical_parts_of,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -73,6 +103,405 @@ impl KernelSet for Neon {
         // SAFETY: NEON is in the build's features (the module's `cfg`).
         unsafe { rgb_steps([m_d, m_c], luma, scales.map(ByteScale::parts), out) };
         Self::rgb_pixels(d_rest, c_rest, l_rest, scales, o_rest);
+    }
+
+    /// Sixteen pixels a step in lanes ([`load_pixels_steps`]); rows
+    /// shorter than a step by the portable loop.
+    #[inline(always)]
+    fn load_pixels(rows: [&[u8]; 2], p: &mut [u8], d: &mut [i16]) {
+        let len = p.len().min(d.len()).min(rows[0].len()).min(rows[1].len());
+        if len < LOAD_STEP {
+            load_pixels_of(rows, p, d);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { load_pixels_steps(rows, p, d, len) };
+        }
+    }
+
+    /// [`PARTS_STEP`] columns a step in lanes ([`vertical_parts_steps`]);
+    /// rows shorter than a step by the portable loop.
+    #[inline(always)]
+    fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) {
+        if d[0].len() < PARTS_STEP {
+            let [v1, v2, v3, v4] = v;
+            vertical_parts_of(d, v1, v2, v3, v4);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { vertical_parts_steps(d, v) };
+        }
+    }
+
+    /// [`E_STEP`] columns a step in lanes ([`smoothed_e_steps`]), `E`
+    /// itself never leaving them (`e` is left as it was); rows shorter
+    /// than a step by the portable loops.
+    #[inline(always)]
+    fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
+        if n < E_STEP + 8 {
+            portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { smoothed_e_steps(vert, e_smoothed, n) };
+        }
+    }
+
+    /// [`PRODUCTS_STEP`] columns a step in lanes ([`products_steps`]);
+    /// rows shorter than a step by the portable loop.
+    #[inline(always)]
+    fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
+        let ProductRows { ints, floats, .. } = rows;
+        if cols.len() < PRODUCTS_STEP {
+            portable_products_row(input, ints, floats, cols);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { products_steps(input, ints, floats, cols.start) };
+        }
+    }
+}
+
+/// Pixels a step of [`load_pixels_steps`]: sixteen bytes.
+const LOAD_STEP: usize = 16;
+
+/// `p0` and `d = p1 − p0` (`u8`; `i16` from `USUBL`, exact within ±255)
+/// of the first `len ≥ 16` pixels, sixteen a step, the last step ending at
+/// `len` (it writes again, the same values, the pixels the step before it
+/// wrote).
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn load_pixels_steps([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16], len: usize) {
+    let (Some(prev), Some(next), Some(p), Some(d), Some(last)) = (
+        prev.get(..len),
+        next.get(..len),
+        p.get_mut(..len),
+        d.get_mut(..len),
+        len.checked_sub(LOAD_STEP),
+    ) else {
+        return;
+    };
+    let (p, d) = (p.as_mut_ptr(), d.as_mut_ptr());
+    let step = |i: usize| {
+        // SAFETY: `i ≤ last = len − 16`: pixels `i .. i + 16` lie in
+        // every row.
+        unsafe {
+            let (a, b) = (
+                vld1q_u8(prev.as_ptr().add(i)),
+                vld1q_u8(next.as_ptr().add(i)),
+            );
+            vst1q_u8(p.add(i), a);
+            vst1q_s16(
+                d.add(i),
+                vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(b), vget_low_u8(a))),
+            );
+            vst1q_s16(d.add(i + 8), vreinterpretq_s16_u16(vsubl_high_u8(b, a)));
+        }
+    };
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(LOAD_STEP) {
+        step((s * LOAD_STEP).min(last));
+    }
+}
+
+/// Columns a step of [`vertical_parts_steps`]: eight, one vector of `i16`.
+const PARTS_STEP: usize = 8;
+
+/// `E`'s four vertical parts (`stages::vertical_parts_of`, term for term)
+/// of rows at least eight long, eight columns a step, the last step ending
+/// at the rows' end (it writes again, the same values, the columns the
+/// step before it wrote): from `d` (i16, ±255), `v1 = b + 4c + d`
+/// (±1530), `v2 = (a + e) + 3(b + d) + 4c` (±3060), `v3 = d − b` (±510),
+/// `v4 = (d + e) − (a + b)` (±1020), every partial sum within `i16`. Exact.
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn vertical_parts_steps(rows: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
+    let len = rows[0].len();
+    let [a, b, c, d, e] = rows.map(|row| row.get(..len));
+    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (a, b, c, d, e) else {
+        return;
+    };
+    let (Some(v1), Some(v2), Some(v3), Some(v4), Some(last)) = (
+        v1.get_mut(..len),
+        v2.get_mut(..len),
+        v3.get_mut(..len),
+        v4.get_mut(..len),
+        len.checked_sub(PARTS_STEP),
+    ) else {
+        return;
+    };
+    let taps = [a, b, c, d, e].map(<[i16]>::as_ptr);
+    let out = [v1, v2, v3, v4].map(<[i16]>::as_mut_ptr);
+    let step = |i: usize| {
+        // SAFETY: `i ≤ last = len − 8`: columns `i .. i + 8` lie in every
+        // row.
+        unsafe {
+            let [a, b, c, d, e] = taps.map(|row| vld1q_s16(row.add(i)));
+            let b_d = vaddq_s16(b, d);
+            let parts = [
+                vmlaq_n_s16(b_d, c, 4),
+                vmlaq_n_s16(vmlaq_n_s16(vaddq_s16(a, e), b_d, 3), c, 4),
+                vsubq_s16(d, b),
+                vsubq_s16(vaddq_s16(d, e), vaddq_s16(a, b)),
+            ];
+            for (row, part) in out.iter().zip(parts) {
+                vst1q_s16(row.add(i), part);
+            }
+        }
+    };
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(PARTS_STEP) {
+        step((s * PARTS_STEP).min(last));
+    }
+}
+
+/// Output columns a step of [`smoothed_e_steps`]: eight, one vector of `i16`.
+const E_STEP: usize = 8;
+
+/// `E` of columns `c .. c + 8` (x, then y; each as two vectors of four
+/// `i32`s) from its vertical parts `v1 … v4` (`stages::boundary_minus_domain_x`
+/// and `_y`, term for term):
+///
+/// | quantity | format, lanes | bound |
+/// |---|---|---|
+/// | vertical parts `v1, v2, v3, v4` | i16 ×8 | 1530, 3060, 510, 1020 |
+/// | `Kbx3 = v1′ − v1‵`; `Box⋆Sobx = (v2′ + v2″) − (v2‵ + v2‴)` | i16 ×8 | 3060; 12 240 |
+/// | `Kby3 = v3‵ + 4·v3 + v3′`; `Box⋆Soby = (v4‴ + v4″) + 3·(v4‵ + v4′) + 4·v4` | i16 ×8 | 3060; 12 240 |
+/// | `E = Kb3 − 3·Box⋆Sob` (`SMLSL` by 3 of the widened parts) | i32 ×4 | 33 660 |
+///
+/// (primes: one and two columns right, back-primes left). Exact.
+///
+/// # Safety
+/// `2 ≤ c` and `c + 10 ≤` every part's length; NEON runs here.
+#[inline]
+#[target_feature(enable = "neon")]
+unsafe fn e_at(parts: [*const i16; 4], c: usize) -> [[int32x4_t; 2]; 2] {
+    let [v1, v2, v3, v4] = parts;
+    // SAFETY: the caller's: columns `c − 2 .. c + 10` lie in every part.
+    let at = |row: *const i16, k: usize| unsafe { vld1q_s16(row.add(c + k - 2)) };
+    let kb_x = vsubq_s16(at(v1, 3), at(v1, 1));
+    let bs_x = vsubq_s16(
+        vaddq_s16(at(v2, 3), at(v2, 4)),
+        vaddq_s16(at(v2, 1), at(v2, 0)),
+    );
+    let kb_y = vmlaq_n_s16(vaddq_s16(at(v3, 1), at(v3, 3)), at(v3, 2), 4);
+    let outer = vmlaq_n_s16(
+        vaddq_s16(at(v4, 0), at(v4, 4)),
+        vaddq_s16(at(v4, 1), at(v4, 3)),
+        3,
+    );
+    let bs_y = vmlaq_n_s16(outer, at(v4, 2), 4);
+    let e = |kb: int16x8_t, bs: int16x8_t| {
+        [
+            vmlsl_n_s16(vmovl_s16(vget_low_s16(kb)), vget_low_s16(bs), 3),
+            vmlsl_high_n_s16(vmovl_high_s16(kb), bs, 3),
+        ]
+    };
+    [e(kb_x, bs_x), e(kb_y, bs_y)]
+}
+
+/// The horizontal binomial of `E` at the four columns from `E`'s vector
+/// `left` on, from `left` and the vector `right` after it: [`binomial_mla`]
+/// of the taps `left`, its three shifts into `right` and `right`. Exact:
+/// within `16 · 33 660 < 2²⁰`.
+#[inline]
+#[target_feature(enable = "neon")]
+fn smooth_e(left: int32x4_t, right: int32x4_t) -> int32x4_t {
+    let (b, c, d) = (
+        vextq_s32::<1>(left, right),
+        vextq_s32::<2>(left, right),
+        vextq_s32::<3>(left, right),
+    );
+    binomial_mla(left, b, c, d, right)
+}
+
+/// `E` smoothed along the row on `[4, n − 4)` ([`KernelSet::smoothed_e`])
+/// from the four vertical parts (valid on `[0, n)`, `n ≥ 16`), eight
+/// columns a step: each step's `E` ([`e_at`]) two to ten columns right of
+/// its first output, the four left of them carried from the step before
+/// (the first step's and the last's from one more [`e_at`]); the last
+/// step ends at the row's end (it writes again, the same values, the
+/// columns the step before it wrote).
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: usize) {
+    let (Some(v1), Some(v2), Some(v3), Some(v4)) =
+        (cut(v1, 0, n), cut(v2, 0, n), cut(v3, 0, n), cut(v4, 0, n))
+    else {
+        return;
+    };
+    let Some(len) = n.checked_sub(8) else {
+        return;
+    };
+    let (Some(sx), Some(sy), Some(last)) = (
+        cut_mut(sx, 4, len),
+        cut_mut(sy, 4, len),
+        len.checked_sub(E_STEP),
+    ) else {
+        return;
+    };
+    let parts = [v1.as_ptr(), v2.as_ptr(), v3.as_ptr(), v4.as_ptr()];
+    let out = [sx.as_mut_ptr(), sy.as_mut_ptr()];
+    // `E` at the four columns left of output `i`'s (window column `4 + i`)
+    // and two right of them: columns `2 + i .. 6 + i`.
+    // SAFETY: `i ≤ last = n − 16`, so `2 ≤ 2 + i` and `2 + i + 10 ≤ n`.
+    let first = |i: usize| unsafe { e_at(parts, 2 + i) }.map(|[low, _]| low);
+    let step = |i: usize, left: [int32x4_t; 2]| {
+        // SAFETY: `i ≤ last = n − 16`, so `2 ≤ 6 + i` and `6 + i + 10 ≤
+        // n`; outputs `i .. i + 8 ≤ len`.
+        unsafe {
+            let e = e_at(parts, 6 + i);
+            for ((row, [a, b]), left) in out.iter().zip(e).zip(left) {
+                i32::store(row.add(i), smooth_e(left, a));
+                i32::store(row.add(i + 4), smooth_e(a, b));
+            }
+            e.map(|[_, b]| b)
+        }
+    };
+    let mut left = first(0);
+    for s in 0..len / E_STEP {
+        left = step(s * E_STEP, left);
+    }
+    if !len.is_multiple_of(E_STEP) {
+        step(last, first(last));
+    }
+}
+
+/// `(a + e) + 4·(b + d) + 6·c` of exact `i32` lanes, in two multiply-adds
+/// by a constant (four instructions): exact where the sum and every
+/// partial sum lie within `i32` (all of the engine's, within `2²⁸`).
+#[inline]
+#[target_feature(enable = "neon")]
+fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
+    vmlaq_n_s32(vmlaq_n_s32(vaddq_s32(a, e), vaddq_s32(b, d), 4), c, 6)
+}
+
+/// Columns a step of [`products_steps`]: eight, one vector of `i16`.
+const PRODUCTS_STEP: usize = 8;
+
+/// `stages::products_of` on the columns from `start` on, as many as the
+/// product rows hold (at least [`PRODUCTS_STEP`]), eight a step, the last
+/// step ending at the rows' end (it writes again, the same values, the
+/// columns the step before it wrote):
+///
+/// | quantity | format, lanes | bound |
+/// |---|---|---|
+/// | `p0` (3×3 neighbourhood) | u8 ×8 | 255 |
+/// | differences of `p0`, `X`, `Y` (Sobel), `4·p0` | i16 ×8 | 255, 1020, 1020 |
+/// | `X², XY, Y²` (`SMULL` of `i16`) | i32 ×4 | `1020² < 2²⁰` |
+/// | `V` x, y; `Q = (Vx′ − Vx‵) + (Vy′ − Vy‵)` | i32 ×4 | `6 854 400 < 2²³`; `16 144 560 < 2²⁴` |
+/// | `T = −κl·d − X·Vx − Y·Vy − 4·p0·Q` (`SMULL`/`SMLSL`) | i64 ×2 | `2²² + 2·2³³ + 2³⁴ < 2³⁵` |
+/// | `⌊(T + 2^(σ−1)) / 2^σ⌋` (`SRSHL` by `−σ`, then narrowed) | i32 ×4 | `< 2²⁷` (`σ ≥ 8`) |
+/// | `Dn′ = that − κh·d` | i32 ×4 | `≤ 2²⁷` (`stages`) |
+/// | `Dn′·2⁻²⁰` (`SCVTF` with 20 fraction bits), `X·…`, `Y·…` | f32 ×4 | `stages` |
+///
+/// With `κ = κh·2^σ + κl`, `Dn = −κh·d·2^σ + T`, so `Dn′ = ⌊(Dn +
+/// 2^(σ−1)) / 2^σ⌋ = −κh·d + ⌊(T + 2^(σ−1)) / 2^σ⌋`: `stages::
+/// rounded_residual`'s value, which sums the same `Dn` in 32-bit halves.
+/// `SRSHL` adds `2^(σ−1)` before its arithmetic shift without overflow.
+/// Every integer step is exact (the lanes' wrapping never happens within
+/// the bounds); `SCVTF` with fraction bits rounds `Dn′ / 2²⁰` once, which
+/// is `Dn′ as f32 · 2⁻²⁰` (scaling by a power of two is exact: no overflow,
+/// no subnormal), and each `f32` product rounds once, as the portable.
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn products_steps(
+    input: &ResidualInputs<'_>,
+    [xx, xy, yy]: [&mut [i32]; 3],
+    [xd, yd]: [&mut [f32]; 2],
+    start: usize,
+) {
+    let ResidualInputs {
+        vx,
+        vy: [vy_up, vy, vy_down],
+        p0: [up, mid, down],
+        d,
+        kappa: [kappa_high, kappa_low],
+        shift,
+    } = *input;
+    let len = xx.len();
+    if [xy.len(), yy.len(), xd.len(), yd.len()]
+        .iter()
+        .any(|&l| l != len)
+    {
+        return;
+    }
+    // `p0` and `V` x one column wider either side; the rest as wide as the row.
+    let first = start.wrapping_sub(1);
+    let wide = |row| cut::<u8>(row, first, len + 2);
+    let at = |row| cut::<i32>(row, start, len);
+    let (Some(up), Some(mid), Some(down), Some(vx), Some(d)) = (
+        wide(up),
+        wide(mid),
+        wide(down),
+        cut(vx, first, len + 2),
+        cut(d, start, len),
+    ) else {
+        return;
+    };
+    let (Some(vy_up), Some(vy), Some(vy_down)) = (at(vy_up), at(vy), at(vy_down)) else {
+        return;
+    };
+    let right_shift = vdupq_n_s64(-i64::from(shift));
+    let Some(last) = len.checked_sub(PRODUCTS_STEP) else {
+        return;
+    };
+    let mut step = |i: usize| {
+        // SAFETY: `i ≤ last`, so columns `i .. i + 8` lie within `len`
+        // (and `i .. i + 10` within the wide rows, `len + 2`): the lengths
+        // checked above.
+        unsafe {
+            let taps = |row: &[u8]| -> [uint8x8_t; 3] {
+                [0, 1, 2].map(|k| vld1_u8(row.as_ptr().add(i + k)))
+            };
+            let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
+            let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
+            let twice_plus =
+                |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
+            let x = twice_plus(diff(pu[2], pu[0]), diff(pm[2], pm[0]), diff(pd[2], pd[0]));
+            let y = twice_plus(diff(pd[0], pu[0]), diff(pd[1], pu[1]), diff(pd[2], pu[2]));
+            let square = |a: int16x8_t, b: int16x8_t| {
+                [
+                    vmull_s16(vget_low_s16(a), vget_low_s16(b)),
+                    vmull_high_s16(a, b),
+                ]
+            };
+            for (row, lanes) in [&mut *xx, &mut *xy, &mut *yy].into_iter().zip([
+                square(x, x),
+                square(x, y),
+                square(y, y),
+            ]) {
+                i32::store(row.as_mut_ptr().add(i), lanes[0]);
+                i32::store(row.as_mut_ptr().add(i + 4), lanes[1]);
+            }
+            let widen = |a: int16x8_t| [vmovl_s16(vget_low_s16(a)), vmovl_high_s16(a)];
+            let (x, y) = (widen(x), widen(y));
+            let p4 = widen(vreinterpretq_s16_u16(vshll_n_u8::<2>(pm[1])));
+            let d = widen(vld1q_s16(d.as_ptr().add(i)));
+            for h in 0..2 {
+                let j = i + 4 * h;
+                let load = |row: &[i32], k: usize| i32::load(row.as_ptr().add(j + k));
+                let (vx_l, vx_c, vx_r) = (load(vx, 0), load(vx, 1), load(vx, 2));
+                let (vy_u, vy_c, vy_d) = (load(vy_up, 0), load(vy, 0), load(vy_down, 0));
+                let q = vaddq_s32(vsubq_s32(vx_r, vx_l), vsubq_s32(vy_d, vy_u));
+                let low = |a: int32x4_t| vget_low_s32(a);
+                let mut t_low = vmull_n_s32(low(d[h]), -kappa_low);
+                t_low = vmlsl_s32(t_low, low(x[h]), low(vx_c));
+                t_low = vmlsl_s32(t_low, low(y[h]), low(vy_c));
+                t_low = vmlsl_s32(t_low, low(p4[h]), low(q));
+                let mut t_high = vmull_high_n_s32(d[h], -kappa_low);
+                t_high = vmlsl_high_s32(t_high, x[h], vx_c);
+                t_high = vmlsl_high_s32(t_high, y[h], vy_c);
+                t_high = vmlsl_high_s32(t_high, p4[h], q);
+                let rounded = vuzp1q_s32(
+                    vreinterpretq_s32_s64(vrshlq_s64(t_low, right_shift)),
+                    vreinterpretq_s32_s64(vrshlq_s64(t_high, right_shift)),
+                );
+                let dn = vcvtq_n_f32_s32::<20>(vmlsq_n_s32(rounded, d[h], kappa_high));
+                f32::store(xd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(x[h]), dn));
+                f32::store(yd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(y[h]), dn));
+            }
+        }
+    };
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(PRODUCTS_STEP) {
+        step((s * PRODUCTS_STEP).min(last));
     }
 }
 
@@ -148,16 +577,6 @@ impl Blocked for Neon {
     }
 }
 
-/// `a + 4b + 6c + 4d + e`, as `4(b + c + d) + 2c + a + e` (exact in `i32`:
-/// every sum of the engine's is within `2²⁸`).
-#[inline]
-#[target_feature(enable = "neon")]
-fn binomial(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
-    let inner = vshlq_n_s32::<2>(vaddq_s32(vaddq_s32(b, c), d));
-    let outer = vaddq_s32(vaddq_s32(vaddq_s32(c, c), a), e);
-    vaddq_s32(inner, outer)
-}
-
 /// `((a + e) + (b + d)·4) + c·6`, rounded as `Sample::binomial` for `f32`
 /// (module doc: the one FMA is exact).
 #[inline]
@@ -173,7 +592,7 @@ fn binomial_f(
     vaddq_f32(sum, vmulq_f32(c, vdupq_n_f32(6.0)))
 }
 
-/// Exact `i32` sums, four a vector ([`binomial`]).
+/// Exact `i32` sums, four a vector ([`binomial_mla`]).
 impl Lanes<BLOCK> for i32 {
     type Vector = int32x4_t;
 
@@ -194,7 +613,7 @@ impl Lanes<BLOCK> for i32 {
     #[inline]
     #[target_feature(enable = "neon")]
     unsafe fn binomial_lanes([a, b, c, d, e]: [int32x4_t; 5]) -> int32x4_t {
-        binomial(a, b, c, d, e)
+        binomial_mla(a, b, c, d, e)
     }
 }
 
