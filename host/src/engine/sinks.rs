@@ -1,8 +1,9 @@
 //! The engine's sinks: where a tile's rows go. One family, each keeping
 //! the magnitudes' extremes of what it received: every pixel
-//! ([`PixelRows`], the fields), or the two magnitudes alone in a tile's
-//! segments of whole-frame planes ([`TileRows`], per-frame min–max and
-//! the cues), with the tile's segments of the RGB image its bytes go to.
+//! ([`PixelRows`], the fields), or the two magnitudes alone in kept
+//! planes ([`KeptRows`], per-frame min–max and the cues): of the whole
+//! frame ([`KeptMagnitudes`]) or of a tile, with its segments of the RGB
+//! image its bytes go to ([`TileRows`]).
 
 use reynoldsflow_core::{ExtremesSink, FlowPixel, Pixels, Plan, Sink};
 
@@ -89,23 +90,77 @@ impl Kept {
     }
 }
 
-/// The first step of per-frame min–max: each row's magnitudes into the
-/// kept planes (the engine's tail writes them there, [`Sink::magnitude_rows`]),
-/// and the frame's extremes.
-pub(crate) struct KeptMagnitudes<'a> {
-    width: usize,
-    /// Whole-frame planes `[|v_d|, |v_c|]`, row-major.
-    pub(crate) planes: [&'a mut [f32]; 2],
+/// Where a kept-magnitudes sink keeps the pixels it receives: both
+/// magnitudes, each in its own plane (so that the byte step reads them in
+/// lanes).
+pub(crate) trait KeptLayout {
+    /// The kept planes' pixels `[x, x + len)` of frame row `y`, if they
+    /// are this sink's.
+    fn at(&mut self, y: usize, x: usize, len: usize) -> Option<[&mut [f32]; 2]>;
+}
+
+/// A sink that keeps the two magnitudes alone, laid out by `L`, and the
+/// extremes of what it received: the first step of per-frame min–max
+/// (the engine's tail writes the magnitudes in place,
+/// [`Sink::magnitude_rows`]) and of the cues.
+pub(crate) struct KeptRows<L> {
+    layout: L,
     /// Of every pixel received so far.
     pub(crate) extremes: ExtremesSink,
 }
+
+impl<L: KeptLayout> Sink for KeptRows<L> {
+    fn reads_fields(&self) -> bool {
+        false
+    }
+
+    #[inline(always)]
+    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
+        if let Some([m_d, m_c]) = self.layout.at(y, x, pixels.len()) {
+            m_d.copy_from_slice(pixels.m_d);
+            m_c.copy_from_slice(pixels.m_c);
+        }
+        self.extremes.row(y, x, pixels);
+    }
+
+    #[inline(always)]
+    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
+        self.layout.at(y, x, width)
+    }
+
+    #[inline(always)]
+    fn kept_row(&mut self, _y: usize, _x: usize, _luma: &[u8], extremes: ExtremesSink) {
+        self.extremes.merge(extremes);
+    }
+}
+
+/// Whole-frame planes `[|v_d|, |v_c|]`, row-major, `width` wide: the
+/// layout of a pair one thread computes.
+pub(crate) struct FramePlanes<'a> {
+    width: usize,
+    planes: [&'a mut [f32]; 2],
+}
+
+impl KeptLayout for FramePlanes<'_> {
+    #[inline(always)]
+    fn at(&mut self, y: usize, x: usize, len: usize) -> Option<[&mut [f32]; 2]> {
+        let start = y * self.width + x;
+        let [m_d, m_c] = &mut self.planes;
+        Some([
+            m_d.get_mut(start..start + len)?,
+            m_c.get_mut(start..start + len)?,
+        ])
+    }
+}
+
+/// The magnitudes of a whole frame, kept until its scales are known.
+pub(crate) type KeptMagnitudes<'a> = KeptRows<FramePlanes<'a>>;
 
 impl<'a> KeptMagnitudes<'a> {
     /// Nothing received yet into `planes`, each `width` wide.
     pub(crate) fn new(width: usize, planes: [&'a mut [f32]; 2]) -> Self {
         Self {
-            width,
-            planes,
+            layout: FramePlanes { width, planes },
             extremes: ExtremesSink::default(),
         }
     }
@@ -119,60 +174,37 @@ impl<'a> KeptMagnitudes<'a> {
         rgb: &mut impl ByteBuffer,
     ) -> Result<(), HostError> {
         let (scale_d, scale_c) = self.extremes.byte_scales();
-        let [m_d, m_c] = self.planes;
+        let [m_d, m_c] = self.layout.planes;
         let rgb = rgb.overwrite(3 * luma.len())?;
         bytes::kept_to_bytes(isa, [m_d, m_c], luma, rgb, &[scale_d, scale_c]);
         Ok(())
     }
-
-    /// Where pixels `[x, x + len)` of frame row `y` are kept.
-    #[inline(always)]
-    fn range(&self, y: usize, x: usize, len: usize) -> std::ops::Range<usize> {
-        let start = y * self.width + x;
-        start..start + len
-    }
-}
-
-impl Sink for KeptMagnitudes<'_> {
-    fn reads_fields(&self) -> bool {
-        false
-    }
-
-    #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
-        let range = self.range(y, x, pixels.len());
-        for (plane, row) in self.planes.iter_mut().zip([pixels.m_d, pixels.m_c]) {
-            if let Some(kept) = plane.get_mut(range.clone()) {
-                kept.copy_from_slice(row);
-            }
-        }
-        self.extremes.row(y, x, pixels);
-    }
-
-    #[inline(always)]
-    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
-        let range = self.range(y, x, width);
-        let [m_d, m_c] = &mut self.planes;
-        Some([m_d.get_mut(range.clone())?, m_c.get_mut(range)?])
-    }
-
-    #[inline(always)]
-    fn kept_row(&mut self, _y: usize, _x: usize, _luma: &[u8], extremes: ExtremesSink) {
-        self.extremes.merge(extremes);
-    }
 }
 
 /// One tile's segments of the frame's kept planes and of its RGB image,
-/// row by row, and the extremes of the magnitudes it received: the sink a
-/// thread computes the tile into. Row `k` of each is frame row
-/// `origin.1 + k` from column `origin.0` on.
-pub(crate) struct TileRows<'a> {
+/// row by row: the layout a thread computes a tile into. Row `k` of each
+/// is frame row `origin.1 + k` from column `origin.0` on.
+pub(crate) struct TileSegments<'a> {
     origin: (usize, usize),
     m_d: Vec<&'a mut [f32]>,
     m_c: Vec<&'a mut [f32]>,
     rgb: Vec<&'a mut [u8]>,
-    pub(crate) extremes: ExtremesSink,
 }
+
+impl KeptLayout for TileSegments<'_> {
+    #[inline(always)]
+    fn at(&mut self, y: usize, x: usize, len: usize) -> Option<[&mut [f32]; 2]> {
+        let (x0, y0) = self.origin;
+        let row = y.checked_sub(y0)?;
+        let start = x.checked_sub(x0)?;
+        let m_d = self.m_d.get_mut(row)?.get_mut(start..start + len)?;
+        let m_c = self.m_c.get_mut(row)?.get_mut(start..start + len)?;
+        Some([m_d, m_c])
+    }
+}
+
+/// One tile's kept magnitudes and bytes, and the extremes it received.
+pub(crate) type TileRows<'a> = KeptRows<TileSegments<'a>>;
 
 impl<'a> TileRows<'a> {
     /// Every tile of `plan` with its segments of `planes` and `rgb`, all
@@ -185,11 +217,13 @@ impl<'a> TileRows<'a> {
     ) -> Vec<Self> {
         let mut tiles: Vec<Self> = plan
             .tiles()
-            .map(|tile| TileRows {
-                origin: (tile.x, tile.y),
-                m_d: Vec::with_capacity(tile.height),
-                m_c: Vec::with_capacity(tile.height),
-                rgb: Vec::with_capacity(tile.height),
+            .map(|tile| KeptRows {
+                layout: TileSegments {
+                    origin: (tile.x, tile.y),
+                    m_d: Vec::with_capacity(tile.height),
+                    m_c: Vec::with_capacity(tile.height),
+                    rgb: Vec::with_capacity(tile.height),
+                },
                 extremes: ExtremesSink::default(),
             })
             .collect();
@@ -206,9 +240,9 @@ impl<'a> TileRows<'a> {
                 .zip(m_c.chunks_mut(tile_width))
                 .zip(rgb.chunks_mut(3 * tile_width));
             for (tile, ((m_d, m_c), rgb)) in tiles[first..].iter_mut().zip(segments) {
-                tile.m_d.push(m_d);
-                tile.m_c.push(m_c);
-                tile.rgb.push(rgb);
+                tile.layout.m_d.push(m_d);
+                tile.layout.m_c.push(m_c);
+                tile.layout.rgb.push(rgb);
             }
         }
         tiles
@@ -224,50 +258,19 @@ impl<'a> TileRows<'a> {
         scales: &[reynoldsflow_core::ByteScale; 2],
         image: &Image,
     ) {
-        let (x0, y0) = self.origin;
-        let rows = self.m_d.iter().zip(&self.m_c).zip(self.rgb.iter_mut());
+        let TileSegments {
+            origin: (x0, y0),
+            m_d,
+            m_c,
+            rgb,
+        } = &mut self.layout;
+        let rows = m_d.iter().zip(m_c.iter()).zip(rgb.iter_mut());
         for (k, ((m_d, m_c), rgb)) in rows.enumerate() {
-            let start = (y0 + k) * width + x0;
+            let start = (*y0 + k) * width + *x0;
             let luma = &luma[start..start + m_d.len()];
             bytes::kept_to_bytes(isa, [m_d, m_c], luma, rgb, scales);
             image.arrange(rgb);
         }
-    }
-
-    /// The segments of row `y`, columns `[x, x + len)`.
-    #[inline(always)]
-    fn at(&mut self, y: usize, x: usize, len: usize) -> Option<[&mut [f32]; 2]> {
-        let (x0, y0) = self.origin;
-        let row = y.checked_sub(y0)?;
-        let start = x.checked_sub(x0)?;
-        let m_d = self.m_d.get_mut(row)?.get_mut(start..start + len)?;
-        let m_c = self.m_c.get_mut(row)?.get_mut(start..start + len)?;
-        Some([m_d, m_c])
-    }
-}
-
-impl Sink for TileRows<'_> {
-    fn reads_fields(&self) -> bool {
-        false
-    }
-
-    #[inline(always)]
-    fn row(&mut self, y: usize, x: usize, pixels: Pixels<'_>) {
-        if let Some([m_d, m_c]) = self.at(y, x, pixels.len()) {
-            m_d.copy_from_slice(pixels.m_d);
-            m_c.copy_from_slice(pixels.m_c);
-        }
-        self.extremes.row(y, x, pixels);
-    }
-
-    #[inline(always)]
-    fn magnitude_rows(&mut self, y: usize, x: usize, width: usize) -> Option<[&mut [f32]; 2]> {
-        self.at(y, x, width)
-    }
-
-    #[inline(always)]
-    fn kept_row(&mut self, _y: usize, _x: usize, _luma: &[u8], extremes: ExtremesSink) {
-        self.extremes.merge(extremes);
     }
 }
 
