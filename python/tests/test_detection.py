@@ -38,8 +38,10 @@ def test_quick_trains_every_input_on_both_families_and_every_seed(quick):
                                                      "results.csv"]
     rows = _csv(out / "results.csv")
     got = {(r["family"], r["input"], r["seed"]) for r in rows}
+    seeds = {"sky": run.QUICK["seeds"], "real": run.QUICK["real_seeds"]}
     assert got == {(f, n, str(s)) for f in run.FAMILIES for n in run.DEFAULT_INPUTS
-                   for s in range(run.QUICK["seeds"])} and len(rows) == len(got)
+                   for s in range(run.EVAL_SEED0, run.EVAL_SEED0 + seeds[f])} and len(rows) == len(got)
+    assert all(bool(r["test_videos"]) == (r["family"] == "real") for r in rows)
     for r in rows:
         assert 0 <= float(r["ap"]) <= 1 and 0 < int(r["best_step"]) <= int(r["stopped_at"]) <= run.QUICK["max_steps"]
     curves = _csv(out / "curves.csv")
@@ -103,6 +105,12 @@ def test_docs_carry_the_committed_run():
     rep = (root / "docs" / "downstream" / "detection" / "report.md").read_text()
     command = re.search(r"Command: `([^`]+)`", rep).group(1)
     assert command == "python -m reynoldsflow.bench.detection --out docs/downstream/detection"  # the defaults
+    # Its seeds: the defaults' count per family, from EVAL_SEED0 on (never run when the rules were fixed).
+    results = _csv(root / "docs" / "downstream" / "detection" / "results.csv")
+    for fam, key in (("sky", "seeds"), ("real", "real_seeds")):
+        seeds = {int(r["seed"]) for r in results if r["family"] == fam}
+        assert seeds == set(range(run.EVAL_SEED0, run.EVAL_SEED0 + run.DEFAULT[key])), (fam, sorted(seeds))
+        assert not seeds & set(run.CALIBRATION_SEEDS)
     gray = re.search(r"^\| gray \| ([0-9.]+) \[[^|]*\| ([0-9.]+) \[", rep, re.M)
     assert all(run.GRAY_RANGE[0] <= float(x) <= run.GRAY_RANGE[1] for x in gray.groups()), gray.group(0)
     docs = (root / "docs" / "evaluation.md").read_text()

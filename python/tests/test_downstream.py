@@ -232,6 +232,20 @@ def test_paired_intervals_resolve_a_clear_difference_and_not_an_identity():
     assert iv.low < iv.estimate < iv.high and 0 <= iv.low and iv.high <= 1
 
 
+def test_strata_keep_each_stratum_s_count_of_seeds_in_every_replicate():
+    """Seeds 0, 1 find every drone, seeds 2, 3 none: resampled across all
+    seeds the mean AP varies between replicates; resampled within the two
+    strata every replicate holds two of each, so the interval is the point."""
+    per = {"x": {s: _records(np.arange(0, 12, 2) if s < 2 else []) for s in range(4)}}
+    free = stats.interval(stats.replicates(per, "ap", reps=300)["x"])
+    assert free.estimate == 0.5 and free.low < 0.5 < free.high
+    strata = {0: "a", 1: "a", 2: "b", 3: "b"}
+    assert stats.interval(stats.replicates(per, "ap", reps=300, strata=strata)["x"]) == stats.Interval(0.5, 0.5, 0.5)
+    # One stratum is the plain bootstrap, draw for draw.
+    one = stats.replicates(per, "ap", reps=50, strata=dict.fromkeys(range(4), "all"))["x"]
+    assert np.array_equal(one, stats.replicates(per, "ap", reps=50)["x"])
+
+
 def test_flow_coding_direction_and_normalisation():
     f = np.zeros((1, 4, 2), np.float32)
     f[0, 1] = [2.0, 0.0]  # right, the longest: full value, red

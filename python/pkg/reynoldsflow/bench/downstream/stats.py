@@ -8,13 +8,15 @@ clips with replacement (a clip brings all its frames and their
 detections). Every input sees the same clips per seed, so a paired
 difference (representation - baseline) uses the same draws for both and
 its interval comes from the replicate differences; it is *resolved* when
-its interval excludes 0.
+its interval excludes 0. Where seeds fall into strata by design (the real
+scenes' test video, which rotates with the seed), the seeds are resampled
+within each stratum.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, Sequence, Tuple
+from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -50,19 +52,26 @@ def _value(r: metrics.Records, idx: np.ndarray, positives: int, metric: str) -> 
 
 
 def replicates(per_seed: Dict[object, Dict[int, metrics.Records]], metric: str, reps: int,
-               seed: int = 0) -> Dict[object, np.ndarray]:
+               seed: int = 0, strata: Optional[Dict[int, object]] = None) -> Dict[object, np.ndarray]:
     """(reps + 1,) values per input: the point estimate first, then the
     bootstrap replicates. per_seed: input -> {seed: Records}, the same seeds
-    and the same clips (in count) for every input."""
+    and the same clips (in count) for every input. strata: seed -> stratum
+    (e.g. the seed's test videos); each replicate resamples the seeds
+    within each stratum, keeping every stratum's count of seeds, so the
+    spread between strata (fixed by the design) is not in the interval.
+    Without it, all seeds are one stratum."""
     inputs = list(per_seed)
     seeds = sorted(per_seed[inputs[0]])
+    groups: Dict[object, list] = {}
+    for s in seeds:
+        groups.setdefault(None if strata is None else strata[s], []).append(s)
     rng = np.random.default_rng([seed, 4])
     split = {i: {s: _by_clip(per_seed[i][s]) for s in seeds} for i in inputs}
     n_clips = {s: len(split[inputs[0]][s][0]) for s in seeds}
     draws = [[(s, np.arange(n_clips[s])) for s in seeds]]
     for _ in range(reps):
-        chosen = rng.choice(len(seeds), size=len(seeds), replace=True)
-        draws.append([(seeds[k], rng.integers(0, n_clips[seeds[k]], n_clips[seeds[k]])) for k in chosen])
+        chosen = [g[k] for g in groups.values() for k in rng.choice(len(g), size=len(g), replace=True)]
+        draws.append([(s, rng.integers(0, n_clips[s], n_clips[s])) for s in chosen])
     out = {}
     for i in inputs:
         values = np.empty(len(draws))
