@@ -72,7 +72,7 @@ use super::blocked::{
 };
 use crate::stages::{
     Pair, ProductRows, ResidualInputs, cut, cut_mut, load_pixels_of, portable_products_row,
-    portable_smoothed_e, vertical_parts_of,
+    portable_smooth, portable_smoothed_e, vertical_parts_of,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -141,6 +141,19 @@ impl KernelSet for Neon {
         } else {
             // SAFETY: NEON is in the build's features (the module's `cfg`).
             unsafe { smoothed_e_steps(vert, e_smoothed, n) };
+        }
+    }
+
+    /// [`SMOOTH_STEP`] columns a step in lanes, both components in one
+    /// loop ([`smooth_steps`]); rows shorter than a step by the portable
+    /// loops.
+    #[inline(always)]
+    fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
+        if n < SMOOTH_STEP + 8 {
+            portable_smooth::<Self>(e_smoothed, v, n);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { smooth_steps(e_smoothed, v, n) };
         }
     }
 
@@ -370,6 +383,56 @@ fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: u
 #[target_feature(enable = "neon")]
 fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
     vmlaq_n_s32(vmlaq_n_s32(vaddq_s32(a, e), vaddq_s32(b, d), 4), c, 6)
+}
+
+/// Columns a step of [`smooth_steps`]: eight, two vectors of `i32`.
+const SMOOTH_STEP: usize = 8;
+
+/// `V`'s vertical binomials (`stages::portable_smooth`) on `[4, n − 4)`
+/// (`n ≥ 16`) of both components, from the five rows of `E` smoothed
+/// along the row (`|·| ≤ 16 · 33 660`) centred on them, eight columns a
+/// step ([`binomial_mla`]: `|V| ≤ 256 · 33 660 < 2²⁴`, every partial sum
+/// within `i32`, exact), the last step ending at the rows' end (it writes
+/// again, the same values, the columns the step before it wrote).
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn smooth_steps([ex, ey]: [[&[i32]; 5]; 2], (vx, vy): Pair<'_, i32>, n: usize) {
+    let Some(len) = n.checked_sub(8) else {
+        return;
+    };
+    let [ax, bx, cx, dx, fx] = ex.map(|row| cut(row, 4, len));
+    let [ay, by, cy, dy, fy] = ey.map(|row| cut(row, 4, len));
+    let (Some(ax), Some(bx), Some(cx), Some(dx), Some(fx)) = (ax, bx, cx, dx, fx) else {
+        return;
+    };
+    let (Some(ay), Some(by), Some(cy), Some(dy), Some(fy)) = (ay, by, cy, dy, fy) else {
+        return;
+    };
+    let (Some(vx), Some(vy), Some(last)) = (
+        cut_mut(vx, 4, len),
+        cut_mut(vy, 4, len),
+        len.checked_sub(SMOOTH_STEP),
+    ) else {
+        return;
+    };
+    let rows = [[ax, bx, cx, dx, fx], [ay, by, cy, dy, fy]].map(|r| r.map(<[i32]>::as_ptr));
+    let out = [vx.as_mut_ptr(), vy.as_mut_ptr()];
+    let step = |i: usize| {
+        // SAFETY: `i ≤ last = len − 8`: columns `i .. i + 8` lie in every
+        // row.
+        unsafe {
+            for (taps, row) in rows.iter().zip(out) {
+                for half in [i, i + 4] {
+                    let [a, b, c, d, e] = taps.map(|tap| i32::load(tap.add(half)));
+                    i32::store(row.add(half), binomial_mla(a, b, c, d, e));
+                }
+            }
+        }
+    };
+    // One call site, so the step is inlined: the last step at `last`.
+    for s in 0..len.div_ceil(SMOOTH_STEP) {
+        step((s * SMOOTH_STEP).min(last));
+    }
 }
 
 /// Columns a step of [`products_steps`]: eight, one vector of `i16`.
