@@ -61,7 +61,7 @@ use core::arch::aarch64::{
     vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
 };
 use core::arch::aarch64::{
-    vextq_s32, vget_low_u8, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vst1q_s16, vst1q_u8,
+    int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vst1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vst1q_s16, vst1q_u8,
     vsubl_high_u8, vsubq_s16,
 };
 use core::ops::Range;
@@ -422,16 +422,22 @@ fn smooth_steps([ex, ey]: [[&[i32]; 5]; 2], (vx, vy): Pair<'_, i32>, n: usize) {
         // row.
         unsafe {
             for (taps, row) in rows.iter().zip(out) {
-                for half in [i, i + 4] {
-                    let [a, b, c, d, e] = taps.map(|tap| i32::load(tap.add(half)));
-                    i32::store(row.add(half), binomial_mla(a, b, c, d, e));
-                }
+                let [a, b, c, d, e] = taps.map(|tap| vld1q_s32_x2(tap.add(i)));
+                let sums = int32x4x2_t(
+                    binomial_mla(a.0, b.0, c.0, d.0, e.0),
+                    binomial_mla(a.1, b.1, c.1, d.1, e.1),
+                );
+                vst1q_s32_x2(row.add(i), sums);
             }
         }
     };
-    // One call site, so the step is inlined: the last step at `last`.
-    for s in 0..len.div_ceil(SMOOTH_STEP) {
-        step((s * SMOOTH_STEP).min(last));
+    // Whole steps from column 0 (the rows' addresses then advance by a
+    // step, and the loads pair: `LDP`), then the last at `last`.
+    for s in 0..len / SMOOTH_STEP {
+        step(s * SMOOTH_STEP);
+    }
+    if !len.is_multiple_of(SMOOTH_STEP) {
+        step(last);
     }
 }
 
