@@ -520,6 +520,17 @@ fn products_steps(
                 [0, 1, 2].map(|k| vld1_u8(row.as_ptr().add(i + k)))
             };
             let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
+            // Every load before the first store (the rows' addresses
+            // come through `input`, so the compiler cannot move a load
+            // past a store): each pair of four lanes then loads as one
+            // (`LDP`).
+            let pair = |row: &[i32], k: usize| {
+                let p = row.as_ptr().add(i + k);
+                [i32::load(p), i32::load(p.add(4))]
+            };
+            let (vx_l, vx_c, vx_r) = (pair(vx, 0), pair(vx, 1), pair(vx, 2));
+            let (vy_u, vy_c, vy_d) = (pair(vy_up, 0), pair(vy, 0), pair(vy_down, 0));
+            let d = vld1q_s16(d.as_ptr().add(i));
             let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
             let twice_plus =
                 |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
@@ -542,12 +553,11 @@ fn products_steps(
             let widen = |a: int16x8_t| [vmovl_s16(vget_low_s16(a)), vmovl_high_s16(a)];
             let (x, y) = (widen(x), widen(y));
             let p4 = widen(vreinterpretq_s16_u16(vshll_n_u8::<2>(pm[1])));
-            let d = widen(vld1q_s16(d.as_ptr().add(i)));
+            let d = widen(d);
+            let mut products = [[vdupq_n_f32(0.0); 2]; 2];
             for h in 0..2 {
-                let j = i + 4 * h;
-                let load = |row: &[i32], k: usize| i32::load(row.as_ptr().add(j + k));
-                let (vx_l, vx_c, vx_r) = (load(vx, 0), load(vx, 1), load(vx, 2));
-                let (vy_u, vy_c, vy_d) = (load(vy_up, 0), load(vy, 0), load(vy_down, 0));
+                let (vx_l, vx_c, vx_r) = (vx_l[h], vx_c[h], vx_r[h]);
+                let (vy_u, vy_c, vy_d) = (vy_u[h], vy_c[h], vy_d[h]);
                 let q = vaddq_s32(vsubq_s32(vx_r, vx_l), vsubq_s32(vy_d, vy_u));
                 let low = |a: int32x4_t| vget_low_s32(a);
                 let mut t_low = vmull_n_s32(low(d[h]), -kappa_low);
@@ -563,8 +573,12 @@ fn products_steps(
                     vreinterpretq_s32_s64(vrshlq_s64(t_high, right_shift)),
                 );
                 let dn = vcvtq_n_f32_s32::<20>(vmlsq_n_s32(rounded, d[h], kappa_high));
-                f32::store(xd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(x[h]), dn));
-                f32::store(yd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(y[h]), dn));
+                products[0][h] = vmulq_f32(vcvtq_f32_s32(x[h]), dn);
+                products[1][h] = vmulq_f32(vcvtq_f32_s32(y[h]), dn);
+            }
+            for (row, [low, high]) in [&mut *xd, &mut *yd].into_iter().zip(products) {
+                f32::store(row.as_mut_ptr().add(i), low);
+                f32::store(row.as_mut_ptr().add(i + 4), high);
             }
         }
     };
