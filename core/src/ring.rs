@@ -70,7 +70,7 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
             rest.split_at(slot.len().min(rest.len())).0
         }
         #[cfg(not(offset_rings))]
-        &self.slots[t % DEPTH]
+        &*self.slots[t % DEPTH]
     }
 
     /// Rows `first .. first + K`, oldest first.
@@ -90,7 +90,7 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
             rest.split_at_mut(len).0
         }
         #[cfg(not(offset_rings))]
-        &mut self.slots[t % DEPTH]
+        &mut *self.slots[t % DEPTH]
     }
 }
 
