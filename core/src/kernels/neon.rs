@@ -16,7 +16,8 @@
 //! and `E`'s horizontal parts eight columns a step in `i16`; `E` widened
 //! to `i32` and smoothed along the row without leaving the registers
 //! (the portable pass wrote it to a row and read it back at five taps);
-//! the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
+//! `V`'s vertical binomials eight columns a step, both components in one
+//! loop; the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
 //! portable loop sums it exactly in two 32-bit halves. Each of these loops
 //! ends a row with one more step that ends at the row's end, over columns
 //! the step before it already wrote (the same values again), where the
