@@ -15,7 +15,10 @@
 /// `DEPTH`. On aarch64, whose row loops are functions of their own (their
 /// rows arrive as parameters), the multiply and clamps of each of some 60
 /// rows a pushed row cost 0.4 instructions a pixel at 640×480 and 1.7 in
-/// 128-px strips (`scripts/embedded-check`). On the scalar boards the
+/// 128-px strips (`scripts/embedded-check`), more with memory of run-time
+/// width, which cannot fold them (the host's `PairEngine::image`, one
+/// strip: 85.4 instructions a pixel with them, 75.0 with the slots and
+/// the NEON `V` of the same change, `scripts/byte-step-aarch64`). On the scalar boards the
 /// multiply and clamps of each of some 60 rows a pushed row, which memory
 /// of a run-time width cannot fold, cost the C API's firmware on the M4F
 /// (`kernels/m4.rs`) 3 % (320×240) to 5 % (160×120) more instructions than

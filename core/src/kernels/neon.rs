@@ -62,8 +62,8 @@ use core::arch::aarch64::{
     vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
 };
 use core::arch::aarch64::{
-    int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vst1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vst1q_s16, vst1q_u8,
-    vsubl_high_u8, vsubq_s16,
+    int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16,
+    vst1q_s16, vst1q_s32_x2, vst1q_u8, vsubl_high_u8, vsubq_s16,
 };
 use core::ops::Range;
 
