@@ -11,6 +11,9 @@
 //!   lanes (x86-64, aarch64), which keep the forms that vectorise; the
 //!   scalar boards (M-profile, RV32) take forms with fewer loads and fewer
 //!   live registers (`stages`, `sink`);
+//! - `offset_rings`: x86-64, whose rings of rows work each row's place
+//!   out from one slice (`ring`); elsewhere the rows' slices are carved
+//!   once a window;
 //! - `dispatched_pass`: x86-64, whose hosts compile the engine pass twice
 //!   (baseline and AVX2, chosen at run time), which needs every row kernel
 //!   inlined into the pass. Elsewhere each row kernel is a function of its
@@ -53,7 +56,9 @@ fn v8m_has_dsp(rustflags: &str) -> bool {
 }
 
 fn main() {
-    println!("cargo::rustc-check-cfg=cfg(fpu_f32, m4_kernels, vector_rows, dispatched_pass)");
+    println!(
+        "cargo::rustc-check-cfg=cfg(fpu_f32, m4_kernels, vector_rows, offset_rings, dispatched_pass)"
+    );
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-env-changed=CARGO_ENCODED_RUSTFLAGS");
     let arch = env::var("CARGO_CFG_TARGET_ARCH").unwrap_or_default();
@@ -61,6 +66,7 @@ fn main() {
     match (arch.as_str(), abi.as_str()) {
         ("x86_64", _) => {
             println!("cargo::rustc-cfg=vector_rows");
+            println!("cargo::rustc-cfg=offset_rings");
             println!("cargo::rustc-cfg=dispatched_pass");
         }
         ("aarch64", _) => println!("cargo::rustc-cfg=vector_rows"),

@@ -4,24 +4,32 @@
 /// lives in slot `t mod DEPTH`, so a stage keeps exactly the rows the next
 /// stage still reads.
 ///
-/// Two forms of one ring. Where the row loops take vector lanes
-/// (`vector_rows`) one slice and the width, each row worked out from `t`
-/// and clamped into the memory: the rows' addresses stay arithmetic on one
-/// base, which the compiler follows into the loops (rows kept as slices in
-/// the ring, loaded from it, kept aarch64's byte loop out of vector lanes:
-/// 117 instructions a pixel at 640×480 against 100). On the scalar boards
-/// the slots carved once a window, a row one index below `DEPTH`: the
+/// Two forms of one ring. On x86-64 (`offset_rings`), whose row loops are
+/// inlined into the pass, one slice and the width, each row worked out
+/// from `t` and clamped into the memory: the rows' addresses stay
+/// arithmetic on one base, which the compiler follows into the loops
+/// (rows kept as slices in the ring, loaded from it, kept the inlined
+/// loops out of vector lanes: on aarch64, before its loops were functions
+/// of their own, 117 instructions a pixel at 640×480 against 100).
+/// Elsewhere the slots carved once a window, a row one index below
+/// `DEPTH`. On aarch64, whose row loops are functions of their own (their
+/// rows arrive as parameters), the multiply and clamps of each of some 60
+/// rows a pushed row cost 0.4 instructions a pixel at 640×480 and 1.7 in
+/// 128-px strips (`scripts/embedded-check`), more with memory of run-time
+/// width, which cannot fold them (the host's `PairEngine::image`, one
+/// strip: 85.4 instructions a pixel with them, 75.0 with the slots and
+/// the NEON `V` of the same change, `scripts/byte-step-aarch64`). On the scalar boards the
 /// multiply and clamps of each of some 60 rows a pushed row, which memory
 /// of a run-time width cannot fold, cost the C API's firmware on the M4F
 /// (`kernels/m4.rs`) 3 % (320×240) to 5 % (160×120) more instructions than
 /// the Rust firmware's compile-time arrays, 2.4 % and 3.1 % this way; the
 /// slots (8 bytes each on 32-bit targets) fit the M0's 16 KiB stack.
 pub(crate) struct RowRing<'m, T, const DEPTH: usize> {
-    #[cfg(vector_rows)]
+    #[cfg(offset_rings)]
     rows: &'m mut [T],
-    #[cfg(vector_rows)]
+    #[cfg(offset_rings)]
     cols: usize,
-    #[cfg(not(vector_rows))]
+    #[cfg(not(offset_rings))]
     slots: [&'m mut [T]; DEPTH],
 }
 
@@ -29,12 +37,12 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
     /// The next `DEPTH` rows of `cols` elements of `memory` (see [`take`]).
     #[inline(always)]
     pub(crate) fn carve(memory: &mut &'m mut [T], cols: usize) -> Self {
-        #[cfg(vector_rows)]
+        #[cfg(offset_rings)]
         return Self {
             rows: take(memory, DEPTH * cols),
             cols,
         };
-        #[cfg(not(vector_rows))]
+        #[cfg(not(offset_rings))]
         Self {
             slots: take_rows(memory, cols),
         }
@@ -42,7 +50,7 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
 
     /// Where row `t` starts (the slot it shares with rows `t ± DEPTH`),
     /// clamped to the memory (which the engines size so it never is).
-    #[cfg(vector_rows)]
+    #[cfg(offset_rings)]
     #[inline(always)]
     fn slot(&self, t: usize) -> core::ops::Range<usize> {
         let len = self.rows.len();
@@ -58,14 +66,14 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
     /// sums ran scalar).
     #[inline(always)]
     pub(crate) fn row(&self, t: usize) -> &[T] {
-        #[cfg(vector_rows)]
+        #[cfg(offset_rings)]
         {
             let slot = self.slot(t);
             let (_, rest) = self.rows.split_at(slot.start);
             rest.split_at(slot.len().min(rest.len())).0
         }
-        #[cfg(not(vector_rows))]
-        &self.slots[t % DEPTH]
+        #[cfg(not(offset_rings))]
+        &*self.slots[t % DEPTH]
     }
 
     /// Rows `first .. first + K`, oldest first.
@@ -77,15 +85,15 @@ impl<'m, T, const DEPTH: usize> RowRing<'m, T, DEPTH> {
     /// Row `t`, to be written.
     #[inline(always)]
     pub(crate) fn row_mut(&mut self, t: usize) -> &mut [T] {
-        #[cfg(vector_rows)]
+        #[cfg(offset_rings)]
         {
             let slot = self.slot(t);
             let (_, rest) = self.rows.split_at_mut(slot.start);
             let len = slot.len().min(rest.len());
             rest.split_at_mut(len).0
         }
-        #[cfg(not(vector_rows))]
-        &mut self.slots[t % DEPTH]
+        #[cfg(not(offset_rings))]
+        &mut *self.slots[t % DEPTH]
     }
 }
 

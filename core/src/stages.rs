@@ -490,13 +490,24 @@ fn boundary_minus_domain_y_row(v3: &[i16], v4: &[i16], out: &mut [i32]) {
 /// the ring of `V`, the x86-64 pass ran it scalar).
 #[inline(always)]
 pub fn smooth<K: KernelSet>(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
-    let [ex, ey] = e_smoothed;
-    vertical_binomial::<K, _>(ex, v.0, n, 4);
-    vertical_binomial::<K, _>(ey, v.1, n, 4);
+    K::smooth(e_smoothed, (&mut *v.0, &mut *v.1), n);
     debug_assert!(
         v.0.iter().chain(v.1.iter()).all(|v| v.abs() <= V_MAX),
         "V beyond its bound"
     );
+}
+
+/// [`smooth`]'s vertical binomials, one component after the other: the
+/// portable kernel of `KernelSet::smooth`.
+#[inline(always)]
+pub(crate) fn portable_smooth<K: KernelSet>(
+    e_smoothed: [[&[i32]; 5]; 2],
+    v: Pair<'_, i32>,
+    n: usize,
+) {
+    let [ex, ey] = e_smoothed;
+    vertical_binomial::<K, _>(ex, v.0, n, 4);
+    vertical_binomial::<K, _>(ey, v.1, n, 4);
 }
 
 /// `|E| ≤ 132 · 255` (module table).

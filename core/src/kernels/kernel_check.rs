@@ -377,6 +377,7 @@ mod neon {
             rows += bytes(&mut values, len)?;
             rows += products(&mut values, len)?;
             rows += smoothed_e(&mut values, len)?;
+            rows += smooth(&mut values, len)?;
             rows += rows_of_d(&mut values, len)?;
         }
         Ok(rows)
@@ -436,6 +437,33 @@ mod neon {
         }
         if out[0] != out[1] {
             return Err("neon: smoothed_e");
+        }
+        Ok(1)
+    }
+
+    /// `V`'s vertical binomials (`KernelSet::smooth`) against the portable
+    /// loops', `len` outputs of a window `len + 8` wide, from rows of `E`
+    /// smoothed along the row within their bound (`16 · 132 · 255`), at
+    /// its ends one time in four.
+    fn smooth(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        const COLS: usize = LEN + 8;
+        const BOUND: i64 = 16 * 132 * 255;
+        let n = len + 8;
+        let e: [[[i32; COLS]; 5]; 2] = core::array::from_fn(|_| {
+            core::array::from_fn(|_| core::array::from_fn(|_| values.within(BOUND) as i32))
+        });
+        let e = e.each_ref().map(|rows| rows.each_ref().map(|r| &r[..n]));
+        let mut out = [[[0i32; COLS]; 2]; 2];
+        for (neon, [vx, vy]) in [false, true].into_iter().zip(out.each_mut()) {
+            let v = (&mut vx[..n], &mut vy[..n]);
+            if neon {
+                Neon::smooth(e, v, n);
+            } else {
+                Portable::smooth(e, v, n);
+            }
+        }
+        if out[0] != out[1] {
+            return Err("neon: smooth");
         }
         Ok(1)
     }

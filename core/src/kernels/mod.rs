@@ -49,8 +49,8 @@ use crate::ring::RowRing;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
     Binomial, FLOAT_CHANNELS, INT_CHANNELS, Pair, ProductRows, ResidualInputs, binomial_of,
-    horizontal_binomial, portable_products_row, portable_smoothed_e, running_binomial,
-    sliding_binomial, vertical_binomial, vertical_parts_of,
+    horizontal_binomial, portable_products_row, portable_smooth, portable_smoothed_e,
+    running_binomial, sliding_binomial, vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink, Pixels};
@@ -113,6 +113,14 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
         portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
+    }
+
+    /// `V`'s vertical binomials on `[4, n − 4)` of both components, from
+    /// the five rows of `E` (smoothed along the row) centred on them:
+    /// `stages::portable_smooth`.
+    #[inline(always)]
+    fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
+        portable_smooth::<Self>(e_smoothed, v, n);
     }
 
     /// The five structure products on columns `cols`, into product rows

@@ -16,7 +16,8 @@
 //! and `E`'s horizontal parts eight columns a step in `i16`; `E` widened
 //! to `i32` and smoothed along the row without leaving the registers
 //! (the portable pass wrote it to a row and read it back at five taps);
-//! the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
+//! `V`'s vertical binomials eight columns a step, both components in one
+//! loop; the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
 //! portable loop sums it exactly in two 32-bit halves. Each of these loops
 //! ends a row with one more step that ends at the row's end, over columns
 //! the step before it already wrote (the same values again), where the
@@ -61,8 +62,8 @@ use core::arch::aarch64::{
     vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
 };
 use core::arch::aarch64::{
-    vextq_s32, vget_low_u8, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16, vst1q_s16, vst1q_u8,
-    vsubl_high_u8, vsubq_s16,
+    int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16,
+    vst1q_s16, vst1q_s32_x2, vst1q_u8, vsubl_high_u8, vsubq_s16,
 };
 use core::ops::Range;
 
@@ -72,7 +73,7 @@ use super::blocked::{
 };
 use crate::stages::{
     Pair, ProductRows, ResidualInputs, cut, cut_mut, load_pixels_of, portable_products_row,
-    portable_smoothed_e, vertical_parts_of,
+    portable_smooth, portable_smoothed_e, vertical_parts_of,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -141,6 +142,19 @@ impl KernelSet for Neon {
         } else {
             // SAFETY: NEON is in the build's features (the module's `cfg`).
             unsafe { smoothed_e_steps(vert, e_smoothed, n) };
+        }
+    }
+
+    /// [`SMOOTH_STEP`] columns a step in lanes, both components in one
+    /// loop ([`smooth_steps`]); rows shorter than a step by the portable
+    /// loops.
+    #[inline(always)]
+    fn smooth(e_smoothed: [[&[i32]; 5]; 2], v: Pair<'_, i32>, n: usize) {
+        if n < SMOOTH_STEP + 8 {
+            portable_smooth::<Self>(e_smoothed, v, n);
+        } else {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            unsafe { smooth_steps(e_smoothed, v, n) };
         }
     }
 
@@ -372,6 +386,62 @@ fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32
     vmlaq_n_s32(vmlaq_n_s32(vaddq_s32(a, e), vaddq_s32(b, d), 4), c, 6)
 }
 
+/// Columns a step of [`smooth_steps`]: eight, two vectors of `i32`.
+const SMOOTH_STEP: usize = 8;
+
+/// `V`'s vertical binomials (`stages::portable_smooth`) on `[4, n − 4)`
+/// (`n ≥ 16`) of both components, from the five rows of `E` smoothed
+/// along the row (`|·| ≤ 16 · 33 660`) centred on them, eight columns a
+/// step ([`binomial_mla`]: `|V| ≤ 256 · 33 660 < 2²⁴`, every partial sum
+/// within `i32`, exact), the last step ending at the rows' end (it writes
+/// again, the same values, the columns the step before it wrote).
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn smooth_steps([ex, ey]: [[&[i32]; 5]; 2], (vx, vy): Pair<'_, i32>, n: usize) {
+    let Some(len) = n.checked_sub(8) else {
+        return;
+    };
+    let [ax, bx, cx, dx, fx] = ex.map(|row| cut(row, 4, len));
+    let [ay, by, cy, dy, fy] = ey.map(|row| cut(row, 4, len));
+    let (Some(ax), Some(bx), Some(cx), Some(dx), Some(fx)) = (ax, bx, cx, dx, fx) else {
+        return;
+    };
+    let (Some(ay), Some(by), Some(cy), Some(dy), Some(fy)) = (ay, by, cy, dy, fy) else {
+        return;
+    };
+    let (Some(vx), Some(vy), Some(last)) = (
+        cut_mut(vx, 4, len),
+        cut_mut(vy, 4, len),
+        len.checked_sub(SMOOTH_STEP),
+    ) else {
+        return;
+    };
+    let rows = [[ax, bx, cx, dx, fx], [ay, by, cy, dy, fy]].map(|r| r.map(<[i32]>::as_ptr));
+    let out = [vx.as_mut_ptr(), vy.as_mut_ptr()];
+    let step = |i: usize| {
+        // SAFETY: `i ≤ last = len − 8`: columns `i .. i + 8` lie in every
+        // row.
+        unsafe {
+            for (taps, row) in rows.iter().zip(out) {
+                let [a, b, c, d, e] = taps.map(|tap| vld1q_s32_x2(tap.add(i)));
+                let sums = int32x4x2_t(
+                    binomial_mla(a.0, b.0, c.0, d.0, e.0),
+                    binomial_mla(a.1, b.1, c.1, d.1, e.1),
+                );
+                vst1q_s32_x2(row.add(i), sums);
+            }
+        }
+    };
+    // Whole steps from column 0 (the rows' addresses then advance by a
+    // step, and the loads pair: `LDP`), then the last at `last`.
+    for s in 0..len / SMOOTH_STEP {
+        step(s * SMOOTH_STEP);
+    }
+    if !len.is_multiple_of(SMOOTH_STEP) {
+        step(last);
+    }
+}
+
 /// Columns a step of [`products_steps`]: eight, one vector of `i16`.
 const PRODUCTS_STEP: usize = 8;
 
@@ -451,6 +521,17 @@ fn products_steps(
                 [0, 1, 2].map(|k| vld1_u8(row.as_ptr().add(i + k)))
             };
             let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
+            // Every load before the first store (the rows' addresses
+            // come through `input`, so the compiler cannot move a load
+            // past a store): each pair of four lanes then loads as one
+            // (`LDP`).
+            let pair = |row: &[i32], k: usize| {
+                let p = row.as_ptr().add(i + k);
+                [i32::load(p), i32::load(p.add(4))]
+            };
+            let (vx_l, vx_c, vx_r) = (pair(vx, 0), pair(vx, 1), pair(vx, 2));
+            let (vy_u, vy_c, vy_d) = (pair(vy_up, 0), pair(vy, 0), pair(vy_down, 0));
+            let d = vld1q_s16(d.as_ptr().add(i));
             let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
             let twice_plus =
                 |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
@@ -473,12 +554,11 @@ fn products_steps(
             let widen = |a: int16x8_t| [vmovl_s16(vget_low_s16(a)), vmovl_high_s16(a)];
             let (x, y) = (widen(x), widen(y));
             let p4 = widen(vreinterpretq_s16_u16(vshll_n_u8::<2>(pm[1])));
-            let d = widen(vld1q_s16(d.as_ptr().add(i)));
+            let d = widen(d);
+            let mut products = [[vdupq_n_f32(0.0); 2]; 2];
             for h in 0..2 {
-                let j = i + 4 * h;
-                let load = |row: &[i32], k: usize| i32::load(row.as_ptr().add(j + k));
-                let (vx_l, vx_c, vx_r) = (load(vx, 0), load(vx, 1), load(vx, 2));
-                let (vy_u, vy_c, vy_d) = (load(vy_up, 0), load(vy, 0), load(vy_down, 0));
+                let (vx_l, vx_c, vx_r) = (vx_l[h], vx_c[h], vx_r[h]);
+                let (vy_u, vy_c, vy_d) = (vy_u[h], vy_c[h], vy_d[h]);
                 let q = vaddq_s32(vsubq_s32(vx_r, vx_l), vsubq_s32(vy_d, vy_u));
                 let low = |a: int32x4_t| vget_low_s32(a);
                 let mut t_low = vmull_n_s32(low(d[h]), -kappa_low);
@@ -494,8 +574,12 @@ fn products_steps(
                     vreinterpretq_s32_s64(vrshlq_s64(t_high, right_shift)),
                 );
                 let dn = vcvtq_n_f32_s32::<20>(vmlsq_n_s32(rounded, d[h], kappa_high));
-                f32::store(xd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(x[h]), dn));
-                f32::store(yd.as_mut_ptr().add(j), vmulq_f32(vcvtq_f32_s32(y[h]), dn));
+                products[0][h] = vmulq_f32(vcvtq_f32_s32(x[h]), dn);
+                products[1][h] = vmulq_f32(vcvtq_f32_s32(y[h]), dn);
+            }
+            for (row, [low, high]) in [&mut *xd, &mut *yd].into_iter().zip(products) {
+                f32::store(row.as_mut_ptr().add(i), low);
+                f32::store(row.as_mut_ptr().add(i + 4), high);
             }
         }
     };
