@@ -5,25 +5,20 @@
 /// stage still reads.
 ///
 /// Two forms of one ring. On x86-64 (`offset_rings`), whose row loops are
-/// inlined into the pass, one slice and the width, each row worked out
-/// from `t` and clamped into the memory: the rows' addresses stay
-/// arithmetic on one base, which the compiler follows into the loops
-/// (rows kept as slices in the ring, loaded from it, kept the inlined
-/// loops out of vector lanes: on aarch64, before its loops were functions
-/// of their own, 117 instructions a pixel at 640×480 against 100).
-/// Elsewhere the slots carved once a window, a row one index below
-/// `DEPTH`. On aarch64, whose row loops are functions of their own (their
-/// rows arrive as parameters), the multiply and clamps of each of some 60
-/// rows a pushed row cost 0.4 instructions a pixel at 640×480 and 1.7 in
-/// 128-px strips (`scripts/embedded-check`), more with memory of run-time
-/// width, which cannot fold them (the host's `PairEngine::image`, one
-/// strip: 85.4 instructions a pixel with them, 75.0 with the slots and
-/// the NEON `V` of the same change, `scripts/byte-step-aarch64`). On the scalar boards the
-/// multiply and clamps of each of some 60 rows a pushed row, which memory
-/// of a run-time width cannot fold, cost the C API's firmware on the M4F
-/// (`kernels/m4.rs`) 3 % (320×240) to 5 % (160×120) more instructions than
-/// the Rust firmware's compile-time arrays, 2.4 % and 3.1 % this way; the
-/// slots (8 bytes each on 32-bit targets) fit the M0's 16 KiB stack.
+/// inlined into the pass: one slice and the width, each row worked out
+/// from `t` and clamped into the memory, so that the rows' addresses stay
+/// arithmetic on one base the compiler follows into the inlined loops
+/// (rows kept as slices and loaded from the ring keep such loops out of
+/// vector lanes). Elsewhere: the slots carved once a window, a row one
+/// index below `DEPTH`, which spares each of some 60 row accesses a pushed
+/// row a multiply and clamps that memory of a run-time width cannot fold.
+/// On aarch64, whose row loops are functions of their own taking their
+/// rows as parameters, that is 0.4 instructions a pixel at 640×480 and 1.7
+/// in 128-px strips (`scripts/embedded-check`); on the M4F, the C API's
+/// firmware (`kernels/m4.rs`, run-time width) comes within 2.4 % (320×240)
+/// and 3.1 % (160×120) of the Rust firmware's compile-time arrays, against
+/// 3 % and 5 % with offsets. The slots (8 bytes each on 32-bit targets) fit
+/// the M0's 16 KiB stack.
 pub(crate) struct RowRing<'m, T, const DEPTH: usize> {
     #[cfg(offset_rings)]
     rows: &'m mut [T],
