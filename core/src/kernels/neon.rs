@@ -172,6 +172,17 @@ impl KernelSet for Neon {
     }
 }
 
+/// `step` at columns `0, W, 2W, …` of a row of `len ≥ W` columns, the
+/// last step at `last = len − W`, overlapping the one before (it writes
+/// again, the same values): whole steps, no scalar remainder. `step` is
+/// called from one place, so that it is inlined.
+#[inline(always)]
+fn overlapping_steps<const W: usize>(len: usize, last: usize, mut step: impl FnMut(usize)) {
+    for s in 0..len.div_ceil(W) {
+        step((s * W).min(last));
+    }
+}
+
 /// Pixels a step of [`load_pixels_steps`]: sixteen bytes.
 const LOAD_STEP: usize = 16;
 
@@ -208,10 +219,7 @@ fn load_pixels_steps([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16], len:
             vst1q_s16(d.add(i + 8), vreinterpretq_s16_u16(vsubl_high_u8(b, a)));
         }
     };
-    // One call site, so the step is inlined: the last step at `last`.
-    for s in 0..len.div_ceil(LOAD_STEP) {
-        step((s * LOAD_STEP).min(last));
-    }
+    overlapping_steps::<LOAD_STEP>(len, last, step);
 }
 
 /// Columns a step of [`vertical_parts_steps`]: eight, one vector of `i16`.
@@ -259,10 +267,7 @@ fn vertical_parts_steps(rows: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
             }
         }
     };
-    // One call site, so the step is inlined: the last step at `last`.
-    for s in 0..len.div_ceil(PARTS_STEP) {
-        step((s * PARTS_STEP).min(last));
-    }
+    overlapping_steps::<PARTS_STEP>(len, last, step);
 }
 
 /// Output columns a step of [`smoothed_e_steps`]: eight, one vector of `i16`.
@@ -512,7 +517,7 @@ fn products_steps(
     let Some(last) = len.checked_sub(PRODUCTS_STEP) else {
         return;
     };
-    let mut step = |i: usize| {
+    let step = |i: usize| {
         // SAFETY: `i ≤ last`, so columns `i .. i + 8` lie within `len`
         // (and `i .. i + 10` within the wide rows, `len + 2`): the lengths
         // checked above.
@@ -583,10 +588,7 @@ fn products_steps(
             }
         }
     };
-    // One call site, so the step is inlined: the last step at `last`.
-    for s in 0..len.div_ceil(PRODUCTS_STEP) {
-        step((s * PRODUCTS_STEP).min(last));
-    }
+    overlapping_steps::<PRODUCTS_STEP>(len, last, step);
 }
 
 /// Pixels a step of [`rgb_steps`]: sixteen bytes a channel, one `ST3`.
