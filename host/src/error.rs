@@ -148,4 +148,11 @@ impl HostError {
             problem: problem.into(),
         }
     }
+
+    /// A panic caught on a worker while `doing` something for `name` (a
+    /// bug, not bad input): the run ends with this error, and whoever waits
+    /// on the worker is not left waiting.
+    pub(crate) fn internal_panic(name: impl Into<String>, doing: &str) -> Self {
+        Self::invalid(name, format!("internal error (panic) while {doing}"))
+    }
 }

@@ -477,10 +477,7 @@ impl Work for Pairs<'_> {
     }
 
     fn panicked(&self, job: &Job, _: Box<dyn std::any::Any + Send>) -> HostError {
-        HostError::invalid(
-            format!("frame {}", job.prev.stem),
-            "internal error (panic) while computing this pair",
-        )
+        HostError::internal_panic(format!("frame {}", job.prev.stem), "computing this pair")
     }
 
     /// The last of the two jobs (and the reader) to use a frame hands it

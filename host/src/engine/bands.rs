@@ -168,12 +168,7 @@ impl<'a, 'p, S: Sink> Bands<'a, 'p, S> {
                 }
             }
         }))
-        .unwrap_or_else(|_| {
-            Err(HostError::invalid(
-                "pair",
-                "internal error (panic) while computing a tile",
-            ))
-        });
+        .unwrap_or_else(|_| Err(HostError::internal_panic("pair", "computing a tile")));
         let mut progress = self.lock();
         if let Err(e) = computed {
             // Nobody waits for the tiles of a failed pair.

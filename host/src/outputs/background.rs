@@ -130,12 +130,7 @@ fn serve<J>(jobs: &Mutex<Receiver<J>>, work: &dyn Fn(J) -> Result<(), HostError>
             return;
         };
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(job)))
-            .unwrap_or_else(|_| {
-                Err(HostError::invalid(
-                    "output",
-                    "internal error (panic) while writing a result",
-                ))
-            });
+            .unwrap_or_else(|_| Err(HostError::internal_panic("output", "writing a result")));
         let mut pending = state.lock();
         if let Err(e) = result {
             pending.error.get_or_insert(e);
