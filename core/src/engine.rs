@@ -20,7 +20,7 @@ use crate::schedule::{
 };
 use crate::stages::{
     FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
-    boundary_minus_domain, smooth, structure_row,
+    boundary_minus_domain, smooth,
 };
 use crate::tail::{TailConstants, TailOut};
 use crate::{Config, Error, ExtremesSink, Fields, Job, Pixels, Tile};
@@ -567,9 +567,7 @@ impl<K: KernelSet> Pass<'_, K> {
                     ScratchRows { gx, gy, high, low }
                 },
             };
-            structure_row::<K>(&input, structure, n);
-            let products = (&mut rows.int_products, &mut rows.float_products);
-            rows.sums.store_row(j, products, n);
+            rows.sums.push_structure(j, &input, structure, n);
         }
         if t >= OUTPUT_START {
             self.emit(config, t - OUTPUT_LAG, sink);

@@ -26,7 +26,9 @@
 use super::{KernelSet, OutputRow, Products, SumRings};
 use crate::ring::take;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
-use crate::stages::{FLOAT_CHANNELS, INT_CHANNELS, Sample};
+use crate::stages::{
+    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, Sample, StructureRows, structure_row,
+};
 use crate::tail::{TailConstants, TailOut};
 use crate::{Extremes, ExtremesSink};
 
@@ -241,7 +243,21 @@ fn scalar_sums<T: Sample, const K: usize, const B: usize>(
 /// horizontal `G` into them and an output row's tail from them, each in
 /// the set's own `#[target_feature]` function (the set's value proves the
 /// CPU runs them).
-pub(crate) trait Blocked: Copy {
+pub(crate) trait Blocked: KernelSet {
+    /// The five structure products of a window row and their horizontal
+    /// `G` into slot `rings.2` of both rings ([`SumRings::push_structure`]):
+    /// [`products_then_sums`], which a set may do in one pass.
+    #[inline(always)]
+    fn structure_sums(
+        self,
+        input: &ResidualInputs<'_>,
+        rows: StructureRows<'_, '_>,
+        rings: (&mut [i32], &mut [f32], usize),
+        n: usize,
+    ) {
+        products_then_sums(self, input, rows, rings, n);
+    }
+
     /// [`horizontal_sums`] in the set's lanes.
     fn horizontal_sums(
         self,
@@ -265,6 +281,32 @@ pub(crate) trait Blocked: Copy {
     ) -> ExtremesSink;
 }
 
+/// The structure products into the product rows (`stages::structure_row`),
+/// then their horizontal `G` into the rings ([`Blocked::horizontal_sums`]).
+#[inline(always)]
+pub(crate) fn products_then_sums<S: Blocked>(
+    set: S,
+    input: &ResidualInputs<'_>,
+    rows: StructureRows<'_, '_>,
+    rings: (&mut [i32], &mut [f32], usize),
+    n: usize,
+) {
+    let StructureRows {
+        int_products,
+        float_products,
+        scratch,
+    } = rows;
+    let products = StructureRows {
+        int_products: &mut *int_products,
+        float_products: &mut *float_products,
+        scratch,
+    };
+    structure_row::<S>(input, products, n);
+    let ints = int_products.each_ref().map(|row| &row[..]);
+    let floats = float_products.each_ref().map(|row| &row[..]);
+    set.horizontal_sums(ints, floats, rings, n);
+}
+
 /// The sums' rings in blocks (module doc): the integer channels' ring and
 /// the `f32` ones', each `SUM_DEPTH · K · cols` values for `K` channels
 /// (the memory of the portable layout's rings), and the set.
@@ -274,7 +316,7 @@ pub(crate) struct BlockedSums<'m, S> {
     floats: &'m mut [f32],
 }
 
-impl<'m, S: Blocked + KernelSet> SumRings<'m, S> for BlockedSums<'m, S> {
+impl<'m, S: Blocked> SumRings<'m, S> for BlockedSums<'m, S> {
     #[inline(always)]
     fn carve(set: S, words: &mut &'m mut [i32], floats: &mut &'m mut [f32], cols: usize) -> Self {
         Self {
@@ -290,6 +332,18 @@ impl<'m, S: Blocked + KernelSet> SumRings<'m, S> for BlockedSums<'m, S> {
         let floats = floats.each_ref().map(|row| &row[..]);
         let rings = (&mut *self.ints, &mut *self.floats, t % SUM_DEPTH);
         self.set.horizontal_sums(ints, floats, rings, n);
+    }
+
+    #[inline(always)]
+    fn push_structure(
+        &mut self,
+        t: usize,
+        input: &ResidualInputs<'_>,
+        rows: StructureRows<'_, 'm>,
+        n: usize,
+    ) {
+        let rings = (&mut *self.ints, &mut *self.floats, t % SUM_DEPTH);
+        self.set.structure_sums(input, rows, rings, n);
     }
 
     /// The vertical `G` is the tail's own, from the blocks.

@@ -3,7 +3,7 @@
 //! from 0 to [`LEN`] (both parities of the two-column loops, every position
 //! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
 //! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
-//! tail, bytes, products, `E` and the rows of `d` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! tail, bytes, products with their horizontal `G`, `E` and the rows of `d` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
 //! (`scripts/embedded-check`). Targets without such loops pass trivially.
 //! Not part of the stable surface.
 
@@ -344,7 +344,7 @@ mod neon {
     use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
     use crate::sink::portable_rgb_tail;
     use crate::stages::{
-        DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS, ProductRows, ResidualInputs, ScratchRows,
+        DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
         load_pixels_of, vertical_parts_of,
     };
     use crate::tail::{TailConstants, TailOut};
@@ -375,7 +375,7 @@ mod neon {
                 }
             }
             rows += bytes(&mut values, len)?;
-            rows += products(&mut values, len)?;
+            rows += structure(&mut values, len)?;
             rows += smoothed_e(&mut values, len)?;
             rows += smooth(&mut values, len)?;
             rows += rows_of_d(&mut values, len)?;
@@ -468,15 +468,16 @@ mod neon {
         Ok(1)
     }
 
-    /// The structure products (`KernelSet::products_row`) against the
-    /// portable ones at the smallest and largest residual shifts and the
-    /// SPEC's default scale: `p0` from 0 to 255, `d` within ±255 and `V`
-    /// within half its bound (so that `Q` reaches its own), each at its
-    /// ends one time in four; `len` columns from column 5 of a window
-    /// `len + 10` wide, as the engine's.
-    fn products(values: &mut Values, len: usize) -> Result<usize, &'static str> {
-        const COLS: usize = LEN + 10;
-        let n = len + 10;
+    /// The structure products and their horizontal `G`
+    /// (`SumRings::push_structure`: one pass in NEON lanes where a window
+    /// has two blocks of output columns) against the portable products
+    /// and sums, through both sets' tails (which `sums_and_tail` holds
+    /// equal), at the smallest and largest residual shifts and the SPEC's
+    /// default scale: `p0` from 0 to 255, `d` within ±255 and `V` within
+    /// half its bound (so that `Q` reaches its own), each at its ends one
+    /// time in four; windows `len + 14` wide, as the engine's.
+    fn structure(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+        let n = len + 2 * HALO;
         let mut rows = 0;
         for (num, den) in [(1, 1), (1, 255), (1, 699_050)] {
             let Ok(scale) = crate::IntensityScale::new(num, den) else {
@@ -489,48 +490,44 @@ mod neon {
             let Ok(config) = Config::new(8, 8, crate::Params { scale, lambda }) else {
                 return Err("neon: products' configuration");
             };
-            let mut v_row =
-                || -> [i32; COLS] { core::array::from_fn(|_| values.within(6_854_400 / 2) as i32) };
-            let (vx, vy) = (v_row(), [v_row(), v_row(), v_row()]);
-            let p0: [[u8; COLS]; 3] = core::array::from_fn(|_| {
-                core::array::from_fn(|_| (values.within(128) + 127).clamp(0, 255) as u8)
-            });
-            let d: [i16; COLS] = core::array::from_fn(|_| values.within(255) as i16);
-            let input = ResidualInputs {
-                vx: &vx[..n],
-                vy: vy.each_ref().map(|r| &r[..n]),
-                p0: p0.each_ref().map(|r| &r[..n]),
-                d: &d[..n],
-                kappa: config.kappa_split(),
-                shift: config.dn_shift,
+            let k = TailConstants {
+                lambda4: config.lambda4,
+                units: config.units(),
             };
-            let (mut ints, mut floats) = ([[[0i32; LEN]; INT_CHANNELS]; 2], [[[0f32; LEN]; 2]; 2]);
-            let [ints_p, ints_n] = &mut ints;
+            let (mut words, mut floats) = ([[0i32; WORDS]; 2], [[0f32; FLOATS]; 2]);
+            let [words_p, words_n] = &mut words;
             let [floats_p, floats_n] = &mut floats;
-            for (neon, ints, floats) in [(false, ints_p, floats_p), (true, ints_n, floats_n)] {
-                let (mut gx, mut gy, mut high, mut low) =
-                    ([0i16; LEN], [0i16; LEN], [0; LEN], [0; LEN]);
-                let rows = ProductRows {
-                    ints: ints.each_mut().map(|r| &mut r[..len]),
-                    floats: floats.each_mut().map(|r| &mut r[..len]),
-                    scratch: ScratchRows {
-                        gx: &mut gx[..len],
-                        gy: &mut gy[..len],
-                        high: &mut high[..len],
-                        low: &mut low[..len],
-                    },
+            let mut portable = Side::new(Portable, words_p, floats_p, n);
+            let mut neon = Side::new(Neon, words_n, floats_n, n);
+            for t in 0..ROWS {
+                let mut v_row = || -> [i32; COLS] {
+                    core::array::from_fn(|_| values.within(6_854_400 / 2) as i32)
                 };
-                if neon {
-                    Neon::products_row(&input, rows, 5..5 + len);
-                } else {
-                    Portable::products_row(&input, rows, 5..5 + len);
+                let (vx, vy) = (v_row(), [v_row(), v_row(), v_row()]);
+                let p0: [[u8; COLS]; 3] = core::array::from_fn(|_| {
+                    core::array::from_fn(|_| (values.within(128) + 127).clamp(0, 255) as u8)
+                });
+                let d: [i16; COLS] = core::array::from_fn(|_| values.within(255) as i16);
+                let input = ResidualInputs {
+                    vx: &vx[..n],
+                    vy: vy.each_ref().map(|r| &r[..n]),
+                    p0: p0.each_ref().map(|r| &r[..n]),
+                    d: &d[..n],
+                    kappa: config.kappa_split(),
+                    shift: config.dn_shift,
+                };
+                portable.push(t, &input, n);
+                neon.push(t, &input, n);
+                let Some(o) = t.checked_sub(SUM_RADIUS).filter(|&o| o >= HALO) else {
+                    continue;
+                };
+                let v = [&vx[..n], &vy[1][..n]];
+                let want = portable.tail(o, v, &k, len, false);
+                if neon.tail(o, v, &k, len, false).rows != want.rows {
+                    return Err("neon: structure sums");
                 }
+                rows += 1;
             }
-            let bits = |rows: &[[f32; LEN]; 2]| rows.map(|r| r.map(f32::to_bits));
-            if ints[0] != ints[1] || bits(&floats[0]) != bits(&floats[1]) {
-                return Err("neon: products_row");
-            }
-            rows += 1;
         }
         Ok(rows)
     }
@@ -670,6 +667,23 @@ mod neon {
             }
             self.sums
                 .store_row(t, (&mut self.ints, &mut self.floats), n);
+        }
+
+        /// Window row `t`'s products, made from `input`, into the rings.
+        fn push(&mut self, t: usize, input: &ResidualInputs<'_>, n: usize) {
+            let (mut gx, mut gy, mut high, mut low) =
+                ([0i16; COLS], [0i16; COLS], [0; COLS], [0; COLS]);
+            let rows = StructureRows {
+                int_products: &mut self.ints,
+                float_products: &mut self.floats,
+                scratch: ScratchRows {
+                    gx: &mut gx[..n],
+                    gy: &mut gy[..n],
+                    high: &mut high[..n],
+                    low: &mut low[..n],
+                },
+            };
+            self.sums.push_structure(t, input, rows, n);
         }
 
         /// Output row `o`'s tail, `len` columns.

@@ -48,9 +48,9 @@ use core::ops::Range;
 use crate::ring::RowRing;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
-    Binomial, FLOAT_CHANNELS, INT_CHANNELS, Pair, ProductRows, ResidualInputs, binomial_of,
-    horizontal_binomial, portable_products_row, portable_smooth, portable_smoothed_e,
-    running_binomial, sliding_binomial, vertical_binomial, vertical_parts_of,
+    Binomial, FLOAT_CHANNELS, INT_CHANNELS, Pair, ProductRows, ResidualInputs, StructureRows,
+    binomial_of, horizontal_binomial, portable_products_row, portable_smooth, portable_smoothed_e,
+    running_binomial, sliding_binomial, structure_row, vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink, Pixels};
@@ -182,6 +182,32 @@ pub(crate) trait SumRings<'m, K: KernelSet>: Sized {
     /// The horizontal `G` of the five product rows (window columns, valid
     /// on `[5, n − 5)`) into window row `t` of the rings, on `[7, n − 7)`.
     fn store_row(&mut self, t: usize, products: Products<'_, 'm>, n: usize);
+
+    /// The five structure products of window row `t` on `[5, n − 5)`
+    /// (`stages::structure_row`, into the product rows) and their
+    /// horizontal `G` into row `t` of the rings ([`SumRings::store_row`]).
+    /// A layout may do both in one pass, the products never stored.
+    #[inline(always)]
+    fn push_structure(
+        &mut self,
+        t: usize,
+        input: &ResidualInputs<'_>,
+        rows: StructureRows<'_, 'm>,
+        n: usize,
+    ) {
+        let StructureRows {
+            int_products,
+            float_products,
+            scratch,
+        } = rows;
+        let products = StructureRows {
+            int_products: &mut *int_products,
+            float_products: &mut *float_products,
+            scratch,
+        };
+        structure_row::<K>(input, products, n);
+        self.store_row(t, (int_products, float_products), n);
+    }
 
     /// The tail of an output row: the vertical `G` of the five sums rows
     /// centred on it (into the product rows, free by then, where the

@@ -56,6 +56,9 @@ use core::arch::aarch64::{
 };
 
 use core::arch::aarch64::{
+    float32x4x2_t, int32x4x3_t, int64x2_t, vextq_f32, vst1q_f32_x2, vst1q_s32_x3,
+};
+use core::arch::aarch64::{
     int16x8_t, uint8x8_t, vaddq_s16, vcvtq_n_f32_s32, vdupq_n_s64, vget_low_s16, vget_low_s32,
     vld1_u8, vld1q_s16, vmlaq_n_s16, vmlsl_high_s32, vmlsl_s32, vmlsq_n_s32, vmovl_high_s16,
     vmovl_s16, vmull_high_n_s32, vmull_high_s16, vmull_n_s32, vmull_s16, vreinterpretq_s16_u16,
@@ -65,15 +68,16 @@ use core::arch::aarch64::{
     int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16,
     vst1q_s16, vst1q_s32_x2, vst1q_u8, vsubl_high_u8, vsubq_s16,
 };
-use core::ops::Range;
 
 use super::KernelSet;
 use super::blocked::{
     self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
+    ring_block,
 };
+use crate::schedule::{HALO, SUM_DEPTH};
 use crate::stages::{
-    Pair, ProductRows, ResidualInputs, cut, cut_mut, load_pixels_of, portable_products_row,
-    portable_smooth, portable_smoothed_e, vertical_parts_of,
+    Pair, ResidualInputs, StructureRows, cut, cut_mut, load_pixels_of, portable_smooth,
+    portable_smoothed_e, vertical_parts_of,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -155,19 +159,6 @@ impl KernelSet for Neon {
         } else {
             // SAFETY: NEON is in the build's features (the module's `cfg`).
             unsafe { smooth_steps(e_smoothed, v, n) };
-        }
-    }
-
-    /// [`PRODUCTS_STEP`] columns a step in lanes ([`products_steps`]);
-    /// rows shorter than a step by the portable loop.
-    #[inline(always)]
-    fn products_row(input: &ResidualInputs<'_>, rows: ProductRows<'_>, cols: Range<usize>) {
-        let ProductRows { ints, floats, .. } = rows;
-        if cols.len() < PRODUCTS_STEP {
-            portable_products_row(input, ints, floats, cols);
-        } else {
-            // SAFETY: NEON is in the build's features (the module's `cfg`).
-            unsafe { products_steps(input, ints, floats, cols.start) };
         }
     }
 }
@@ -447,13 +438,67 @@ fn smooth_steps([ex, ey]: [[&[i32]; 5]; 2], (vx, vy): Pair<'_, i32>, n: usize) {
     }
 }
 
-/// Columns a step of [`products_steps`]: eight, one vector of `i16`.
-const PRODUCTS_STEP: usize = 8;
+/// The products' inputs (`ResidualInputs`), each row from window column 0
+/// and long enough for [`products_at`] at every column a row's
+/// [`structure_sums_steps`] reads ([`StructureInputs::new`] checks it once
+/// a row), and the residual's constants.
+struct StructureInputs<'a> {
+    p0: [&'a [u8]; 3],
+    vx: &'a [i32],
+    vy: [&'a [i32]; 3],
+    d: &'a [i16],
+    /// `[κh, κl]`.
+    kappa: [i32; 2],
+    /// `−σ` in both lanes (`SRSHL` shifts right by it).
+    right_shift: int64x2_t,
+    /// Blocks of the row's output columns, at least two.
+    blocks: usize,
+}
 
-/// `stages::products_of` on the columns from `start` on, as many as the
-/// product rows hold (at least [`PRODUCTS_STEP`]), eight a step, the last
-/// step ending at the rows' end (it writes again, the same values, the
-/// columns the step before it wrote):
+impl<'a> StructureInputs<'a> {
+    /// The inputs of a window of `n` columns, or `None` where the window
+    /// has fewer than two blocks of output columns or a row is shorter
+    /// than the columns [`structure_sums_steps`] reads (never, for the
+    /// engine's rows, a window wide).
+    #[inline(always)]
+    fn new(input: &ResidualInputs<'a>, n: usize) -> Option<Self> {
+        let ResidualInputs {
+            vx,
+            vy,
+            p0,
+            d,
+            kappa,
+            shift,
+        } = *input;
+        let blocks = blocks::<BLOCK>(n.checked_sub(2 * HALO)?);
+        // `products_at` at columns up to `4·(blocks − 2) + 9` reads
+        // columns up to `4·blocks + 9` (`≤ n − 2`).
+        let reach = BLOCK * blocks + 10;
+        let long = p0.iter().map(|r| r.len()).chain(vy.iter().map(|r| r.len()));
+        if blocks < 2 || long.chain([vx.len(), d.len()]).any(|len| len < reach) {
+            return None;
+        }
+        Some(Self {
+            p0,
+            vx,
+            vy,
+            d,
+            kappa,
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            right_shift: unsafe { vdupq_n_s64(-i64::from(shift)) },
+            blocks,
+        })
+    }
+}
+
+/// The five structure products of eight window columns, as two vectors of
+/// four each: `X², XY, Y²` and `X·Dn′·2⁻²⁰, Y·Dn′·2⁻²⁰`.
+struct Products8 {
+    ints: [[int32x4_t; 2]; INTS],
+    floats: [[float32x4_t; 2]; FLOATS],
+}
+
+/// `stages::products_of` at window columns `c .. c + 8`:
 ///
 /// | quantity | format, lanes | bound |
 /// |---|---|---|
@@ -474,121 +519,199 @@ const PRODUCTS_STEP: usize = 8;
 /// the bounds); `SCVTF` with fraction bits rounds `Dn′ / 2²⁰` once, which
 /// is `Dn′ as f32 · 2⁻²⁰` (scaling by a power of two is exact: no overflow,
 /// no subnormal), and each `f32` product rounds once, as the portable.
-#[inline(never)]
+///
+/// # Safety
+/// `1 ≤ c`, and columns `c − 1 .. c + 9` lie in every row of `inputs`
+/// (`c + 9 ≤` the reach [`StructureInputs::new`] checked); NEON runs here.
+#[inline]
 #[target_feature(enable = "neon")]
-fn products_steps(
-    input: &ResidualInputs<'_>,
-    [xx, xy, yy]: [&mut [i32]; 3],
-    [xd, yd]: [&mut [f32]; 2],
-    start: usize,
-) {
-    let ResidualInputs {
+unsafe fn products_at(inputs: &StructureInputs<'_>, c: usize) -> Products8 {
+    let StructureInputs {
+        p0: [up, mid, down],
         vx,
         vy: [vy_up, vy, vy_down],
-        p0: [up, mid, down],
         d,
         kappa: [kappa_high, kappa_low],
-        shift,
-    } = *input;
-    let len = xx.len();
-    if [xy.len(), yy.len(), xd.len(), yd.len()]
-        .iter()
-        .any(|&l| l != len)
-    {
-        return;
+        right_shift,
+        ..
+    } = *inputs;
+    // SAFETY (every load below): the caller's, columns `c − 1 .. c + 9`.
+    let taps = |row: &[u8]| -> [uint8x8_t; 3] {
+        [0, 1, 2].map(|k| unsafe { vld1_u8(row.as_ptr().add(c - 1 + k)) })
+    };
+    let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
+    // Every load before the first use, so that neighbouring four-lane
+    // loads pair (`LDP`).
+    let pair = |row: &[i32], from: usize| unsafe {
+        let p = row.as_ptr().add(from);
+        [i32::load(p), i32::load(p.add(4))]
+    };
+    let (vx_l, vx_c, vx_r) = (pair(vx, c - 1), pair(vx, c), pair(vx, c + 1));
+    let (vy_u, vy_c, vy_d) = (pair(vy_up, c), pair(vy, c), pair(vy_down, c));
+    let d = unsafe { vld1q_s16(d.as_ptr().add(c)) };
+    let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
+    let twice_plus = |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
+    let x = twice_plus(diff(pu[2], pu[0]), diff(pm[2], pm[0]), diff(pd[2], pd[0]));
+    let y = twice_plus(diff(pd[0], pu[0]), diff(pd[1], pu[1]), diff(pd[2], pu[2]));
+    let square = |a: int16x8_t, b: int16x8_t| {
+        [
+            vmull_s16(vget_low_s16(a), vget_low_s16(b)),
+            vmull_high_s16(a, b),
+        ]
+    };
+    let ints = [square(x, x), square(x, y), square(y, y)];
+    let widen = |a: int16x8_t| [vmovl_s16(vget_low_s16(a)), vmovl_high_s16(a)];
+    let (x, y) = (widen(x), widen(y));
+    let p4 = widen(vreinterpretq_s16_u16(vshll_n_u8::<2>(pm[1])));
+    let d = widen(d);
+    let mut floats = [[vdupq_n_f32(0.0); 2]; FLOATS];
+    for h in 0..2 {
+        let (vx_l, vx_c, vx_r) = (vx_l[h], vx_c[h], vx_r[h]);
+        let (vy_u, vy_c, vy_d) = (vy_u[h], vy_c[h], vy_d[h]);
+        let q = vaddq_s32(vsubq_s32(vx_r, vx_l), vsubq_s32(vy_d, vy_u));
+        let low = |a: int32x4_t| vget_low_s32(a);
+        let mut t_low = vmull_n_s32(low(d[h]), -kappa_low);
+        t_low = vmlsl_s32(t_low, low(x[h]), low(vx_c));
+        t_low = vmlsl_s32(t_low, low(y[h]), low(vy_c));
+        t_low = vmlsl_s32(t_low, low(p4[h]), low(q));
+        let mut t_high = vmull_high_n_s32(d[h], -kappa_low);
+        t_high = vmlsl_high_s32(t_high, x[h], vx_c);
+        t_high = vmlsl_high_s32(t_high, y[h], vy_c);
+        t_high = vmlsl_high_s32(t_high, p4[h], q);
+        let rounded = vuzp1q_s32(
+            vreinterpretq_s32_s64(vrshlq_s64(t_low, right_shift)),
+            vreinterpretq_s32_s64(vrshlq_s64(t_high, right_shift)),
+        );
+        let dn = vcvtq_n_f32_s32::<20>(vmlsq_n_s32(rounded, d[h], kappa_high));
+        floats[0][h] = vmulq_f32(vcvtq_f32_s32(x[h]), dn);
+        floats[1][h] = vmulq_f32(vcvtq_f32_s32(y[h]), dn);
     }
-    // `p0` and `V` x one column wider either side; the rest as wide as the row.
-    let first = start.wrapping_sub(1);
-    let wide = |row| cut::<u8>(row, first, len + 2);
-    let at = |row| cut::<i32>(row, start, len);
-    let (Some(up), Some(mid), Some(down), Some(vx), Some(d)) = (
-        wide(up),
-        wide(mid),
-        wide(down),
-        cut(vx, first, len + 2),
-        cut(d, start, len),
+    Products8 { ints, floats }
+}
+
+/// The binomial along the row of four `i32` columns: the taps `left`,
+/// its three shifts into `right` (`EXT`) and `right`, the vector after it
+/// ([`binomial_mla`]).
+#[inline]
+#[target_feature(enable = "neon")]
+fn along_row_s32(left: int32x4_t, right: int32x4_t) -> int32x4_t {
+    let (b, c, d) = (
+        vextq_s32::<1>(left, right),
+        vextq_s32::<2>(left, right),
+        vextq_s32::<3>(left, right),
+    );
+    binomial_mla(left, b, c, d, right)
+}
+
+/// [`along_row_s32`] of `f32` columns ([`binomial_f`]: the taps in
+/// `Sample::binomial`'s order).
+#[inline]
+#[target_feature(enable = "neon")]
+fn along_row_f32(left: float32x4_t, right: float32x4_t) -> float32x4_t {
+    let (b, c, d) = (
+        vextq_f32::<1>(left, right),
+        vextq_f32::<2>(left, right),
+        vextq_f32::<3>(left, right),
+    );
+    binomial_f(left, b, c, d, right)
+}
+
+/// The five structure products of a window row and their horizontal `G`
+/// into slot `slot` of the blocked rings ([`Blocked::structure_sums`]),
+/// the products never leaving the lanes: two blocks a step. Block `b`'s
+/// taps start at window column `5 + 4b` (`blocked::horizontal_sums`), so
+/// its sums are [`along_row_s32`] / [`along_row_f32`] of the products of
+/// columns `5 + 4b ..` and `9 + 4b ..`: a step makes the products of the
+/// eight columns from `9 + 4b` ([`products_at`]) and takes those of the
+/// four before from the step before it (the first step makes them: the
+/// upper half of [`products_at`] from column 1). With an odd number of
+/// blocks, the last step covers the last two blocks, the one before
+/// written again with the same sums. Lanes past the row's last output
+/// column get sums of products of the columns after it (bounded like any,
+/// from rows that hold earlier values; the tail discards them). Exact as
+/// [`products_at`] and the binomials are.
+#[inline(never)]
+#[target_feature(enable = "neon")]
+fn structure_sums_steps(
+    inputs: &StructureInputs<'_>,
+    (int_ring, float_ring, slot): (&mut [i32], &mut [f32], usize),
+) {
+    let blocks = inputs.blocks;
+    let slot = slot % SUM_DEPTH;
+    let (int_block, float_block) = (ring_block::<BLOCK>(INTS), ring_block::<BLOCK>(FLOATS));
+    let (Some(int_ring), Some(float_ring)) = (
+        int_ring.get_mut(slot * INTS * BLOCK..blocks * int_block),
+        float_ring.get_mut(slot * FLOATS * BLOCK..blocks * float_block),
     ) else {
         return;
     };
-    let (Some(vy_up), Some(vy), Some(vy_down)) = (at(vy_up), at(vy), at(vy_down)) else {
-        return;
-    };
-    let right_shift = vdupq_n_s64(-i64::from(shift));
-    let Some(last) = len.checked_sub(PRODUCTS_STEP) else {
-        return;
-    };
-    let step = |i: usize| {
-        // SAFETY: `i ≤ last`, so columns `i .. i + 8` lie within `len`
-        // (and `i .. i + 10` within the wide rows, `len + 2`): the lengths
-        // checked above.
+    let (int_out, float_out) = (int_ring.as_mut_ptr(), float_ring.as_mut_ptr());
+    // The sums of blocks `b` and `b + 1` from the products of the four
+    // columns before them (`carry`); the products of their last four.
+    let step = |b: usize, carry: Products4| -> Products4 {
+        // SAFETY: `b ≤ blocks − 2`, so `products_at` reads columns from
+        // `4b + 8 ≥ 1` to `4b + 18 ≤ 4·blocks + 10`, the reach checked;
+        // blocks `b` and `b + 1` lie in the rings (their lengths, above),
+        // channel `ch` of a block's slot at `ch · 4` from its first
+        // (`blocked::at`).
         unsafe {
-            let taps = |row: &[u8]| -> [uint8x8_t; 3] {
-                [0, 1, 2].map(|k| vld1_u8(row.as_ptr().add(i + k)))
-            };
-            let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
-            // Every load before the first store (the rows' addresses
-            // come through `input`, so the compiler cannot move a load
-            // past a store): each pair of four lanes then loads as one
-            // (`LDP`).
-            let pair = |row: &[i32], k: usize| {
-                let p = row.as_ptr().add(i + k);
-                [i32::load(p), i32::load(p.add(4))]
-            };
-            let (vx_l, vx_c, vx_r) = (pair(vx, 0), pair(vx, 1), pair(vx, 2));
-            let (vy_u, vy_c, vy_d) = (pair(vy_up, 0), pair(vy, 0), pair(vy_down, 0));
-            let d = vld1q_s16(d.as_ptr().add(i));
-            let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
-            let twice_plus =
-                |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
-            let x = twice_plus(diff(pu[2], pu[0]), diff(pm[2], pm[0]), diff(pd[2], pd[0]));
-            let y = twice_plus(diff(pd[0], pu[0]), diff(pd[1], pu[1]), diff(pd[2], pu[2]));
-            let square = |a: int16x8_t, b: int16x8_t| {
-                [
-                    vmull_s16(vget_low_s16(a), vget_low_s16(b)),
-                    vmull_high_s16(a, b),
-                ]
-            };
-            for (row, lanes) in [&mut *xx, &mut *xy, &mut *yy].into_iter().zip([
-                square(x, x),
-                square(x, y),
-                square(y, y),
-            ]) {
-                i32::store(row.as_mut_ptr().add(i), lanes[0]);
-                i32::store(row.as_mut_ptr().add(i + 4), lanes[1]);
-            }
-            let widen = |a: int16x8_t| [vmovl_s16(vget_low_s16(a)), vmovl_high_s16(a)];
-            let (x, y) = (widen(x), widen(y));
-            let p4 = widen(vreinterpretq_s16_u16(vshll_n_u8::<2>(pm[1])));
-            let d = widen(d);
-            let mut products = [[vdupq_n_f32(0.0); 2]; 2];
-            for h in 0..2 {
-                let (vx_l, vx_c, vx_r) = (vx_l[h], vx_c[h], vx_r[h]);
-                let (vy_u, vy_c, vy_d) = (vy_u[h], vy_c[h], vy_d[h]);
-                let q = vaddq_s32(vsubq_s32(vx_r, vx_l), vsubq_s32(vy_d, vy_u));
-                let low = |a: int32x4_t| vget_low_s32(a);
-                let mut t_low = vmull_n_s32(low(d[h]), -kappa_low);
-                t_low = vmlsl_s32(t_low, low(x[h]), low(vx_c));
-                t_low = vmlsl_s32(t_low, low(y[h]), low(vy_c));
-                t_low = vmlsl_s32(t_low, low(p4[h]), low(q));
-                let mut t_high = vmull_high_n_s32(d[h], -kappa_low);
-                t_high = vmlsl_high_s32(t_high, x[h], vx_c);
-                t_high = vmlsl_high_s32(t_high, y[h], vy_c);
-                t_high = vmlsl_high_s32(t_high, p4[h], q);
-                let rounded = vuzp1q_s32(
-                    vreinterpretq_s32_s64(vrshlq_s64(t_low, right_shift)),
-                    vreinterpretq_s32_s64(vrshlq_s64(t_high, right_shift)),
+            let next = products_at(inputs, 4 * b + 9);
+            for (k, block) in [b, b + 1].into_iter().enumerate() {
+                let (ints, floats) = (
+                    int_out.add(block * int_block),
+                    float_out.add(block * float_block),
                 );
-                let dn = vcvtq_n_f32_s32::<20>(vmlsq_n_s32(rounded, d[h], kappa_high));
-                products[0][h] = vmulq_f32(vcvtq_f32_s32(x[h]), dn);
-                products[1][h] = vmulq_f32(vcvtq_f32_s32(y[h]), dn);
+                let int = |ch: usize| {
+                    let left = if k == 0 {
+                        carry.ints[ch]
+                    } else {
+                        next.ints[ch][0]
+                    };
+                    along_row_s32(left, next.ints[ch][k])
+                };
+                vst1q_s32_x3(ints, int32x4x3_t(int(0), int(1), int(2)));
+                let float = |ch: usize| {
+                    let left = if k == 0 {
+                        carry.floats[ch]
+                    } else {
+                        next.floats[ch][0]
+                    };
+                    along_row_f32(left, next.floats[ch][k])
+                };
+                vst1q_f32_x2(floats, float32x4x2_t(float(0), float(1)));
             }
-            for (row, [low, high]) in [&mut *xd, &mut *yd].into_iter().zip(products) {
-                f32::store(row.as_mut_ptr().add(i), low);
-                f32::store(row.as_mut_ptr().add(i + 4), high);
-            }
+            Products4::upper(&next)
         }
     };
-    overlapping_steps::<PRODUCTS_STEP>(len, last, step);
+    // SAFETY: columns 0 .. 10 lie in every row (the reach, `blocks ≥ 2`).
+    let mut carry = Products4::upper(&unsafe { products_at(inputs, 1) });
+    // `step` called from one place, so that it is inlined.
+    for s in 0..blocks.div_ceil(2) {
+        let b = (2 * s).min(blocks - 2);
+        if b < 2 * s {
+            // SAFETY: columns `4b .. 4b + 10` lie in every row (the reach).
+            carry = Products4::upper(&unsafe { products_at(inputs, 4 * b + 1) });
+        }
+        carry = step(b, carry);
+    }
+}
+
+/// The products of four window columns: the upper half of a [`Products8`].
+#[derive(Clone, Copy)]
+struct Products4 {
+    ints: [int32x4_t; INTS],
+    floats: [float32x4_t; FLOATS],
+}
+
+impl Products4 {
+    /// Columns `c + 4 .. c + 8` of the products of `c .. c + 8`.
+    #[inline(always)]
+    fn upper(products: &Products8) -> Self {
+        Self {
+            ints: products.ints.map(|[_, high]| high),
+            floats: products.floats.map(|[_, high]| high),
+        }
+    }
 }
 
 /// Pixels a step of [`rgb_steps`]: sixteen bytes a channel, one `ST3`.
@@ -638,6 +761,24 @@ fn rgb_steps([m_d, m_c]: [&[f32]; 2], luma: &[u8], scales: [[f32; 2]; 2], out: &
 const BLOCK: usize = 4;
 
 impl Blocked for Neon {
+    /// In one pass ([`structure_sums_steps`]) where the window has two
+    /// blocks of output columns or more; narrower ones through the
+    /// product rows.
+    #[inline(always)]
+    fn structure_sums(
+        self,
+        input: &ResidualInputs<'_>,
+        rows: StructureRows<'_, '_>,
+        rings: (&mut [i32], &mut [f32], usize),
+        n: usize,
+    ) {
+        match StructureInputs::new(input, n) {
+            // SAFETY: NEON is in the build's features (the module's `cfg`).
+            Some(inputs) => unsafe { structure_sums_steps(&inputs, rings) },
+            None => blocked::products_then_sums(self, input, rows, rings, n),
+        }
+    }
+
     #[inline(always)]
     fn horizontal_sums(
         self,
