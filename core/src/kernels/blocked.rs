@@ -23,12 +23,10 @@
 //! checked once a row.
 #![allow(unsafe_code)]
 
-use super::{KernelSet, OutputRow, Products, SumRings};
+use super::{KernelSet, OutputRow, Products, SumRings, products_then_store};
 use crate::ring::take;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
-use crate::stages::{
-    FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, Sample, StructureRows, structure_row,
-};
+use crate::stages::{FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, Sample, StructureRows};
 use crate::tail::{TailConstants, TailOut};
 use crate::{Extremes, ExtremesSink};
 
@@ -245,17 +243,18 @@ fn scalar_sums<T: Sample, const K: usize, const B: usize>(
 /// CPU runs them).
 pub(crate) trait Blocked: KernelSet {
     /// The five structure products of a window row and their horizontal
-    /// `G` into slot `rings.2` of both rings ([`SumRings::push_structure`]):
-    /// [`products_then_sums`], which a set may do in one pass.
+    /// `G` into slot `rings.2` of both rings in one pass, the products
+    /// never stored: whether the set did (by default it does not, and the
+    /// engine goes through the product rows: `products_then_store`).
     #[inline(always)]
     fn structure_sums(
         self,
         input: &ResidualInputs<'_>,
-        rows: StructureRows<'_, '_>,
         rings: (&mut [i32], &mut [f32], usize),
         n: usize,
-    ) {
-        products_then_sums(self, input, rows, rings, n);
+    ) -> bool {
+        let _ = (input, rings, n);
+        false
     }
 
     /// [`horizontal_sums`] in the set's lanes.
@@ -279,32 +278,6 @@ pub(crate) trait Blocked: KernelSet {
         m: [&mut [f32]; 2],
         fields: [&mut [f32]; 4],
     ) -> ExtremesSink;
-}
-
-/// The structure products into the product rows (`stages::structure_row`),
-/// then their horizontal `G` into the rings ([`Blocked::horizontal_sums`]).
-#[inline(always)]
-pub(crate) fn products_then_sums<S: Blocked>(
-    set: S,
-    input: &ResidualInputs<'_>,
-    rows: StructureRows<'_, '_>,
-    rings: (&mut [i32], &mut [f32], usize),
-    n: usize,
-) {
-    let StructureRows {
-        int_products,
-        float_products,
-        scratch,
-    } = rows;
-    let products = StructureRows {
-        int_products: &mut *int_products,
-        float_products: &mut *float_products,
-        scratch,
-    };
-    structure_row::<S>(input, products, n);
-    let ints = int_products.each_ref().map(|row| &row[..]);
-    let floats = float_products.each_ref().map(|row| &row[..]);
-    set.horizontal_sums(ints, floats, rings, n);
 }
 
 /// The sums' rings in blocks (module doc): the integer channels' ring and
@@ -343,7 +316,9 @@ impl<'m, S: Blocked> SumRings<'m, S> for BlockedSums<'m, S> {
         n: usize,
     ) {
         let rings = (&mut *self.ints, &mut *self.floats, t % SUM_DEPTH);
-        self.set.structure_sums(input, rows, rings, n);
+        if !self.set.structure_sums(input, rings, n) {
+            products_then_store::<S, Self>(self, t, input, rows, n);
+        }
     }
 
     /// The vertical `G` is the tail's own, from the blocks.

@@ -184,9 +184,9 @@ pub(crate) trait SumRings<'m, K: KernelSet>: Sized {
     fn store_row(&mut self, t: usize, products: Products<'_, 'm>, n: usize);
 
     /// The five structure products of window row `t` on `[5, n − 5)`
-    /// (`stages::structure_row`, into the product rows) and their
-    /// horizontal `G` into row `t` of the rings ([`SumRings::store_row`]).
-    /// A layout may do both in one pass, the products never stored.
+    /// and their horizontal `G` into row `t` of the rings:
+    /// [`products_then_store`]. A layout may do both in one pass, the
+    /// products never stored.
     #[inline(always)]
     fn push_structure(
         &mut self,
@@ -195,18 +195,7 @@ pub(crate) trait SumRings<'m, K: KernelSet>: Sized {
         rows: StructureRows<'_, 'm>,
         n: usize,
     ) {
-        let StructureRows {
-            int_products,
-            float_products,
-            scratch,
-        } = rows;
-        let products = StructureRows {
-            int_products: &mut *int_products,
-            float_products: &mut *float_products,
-            scratch,
-        };
-        structure_row::<K>(input, products, n);
-        self.store_row(t, (int_products, float_products), n);
+        products_then_store::<K, Self>(self, t, input, rows, n);
     }
 
     /// The tail of an output row: the vertical `G` of the five sums rows
@@ -215,6 +204,31 @@ pub(crate) trait SumRings<'m, K: KernelSet>: Sized {
     /// rows' extremes where the set found them as it wrote them, `None`
     /// where it did not.
     fn tail_row(&mut self, row: OutputRow<'_, 'm>, out: TailOut<'_>) -> Option<ExtremesSink>;
+}
+
+/// The five structure products of window row `t` into the product rows
+/// (`stages::structure_row`), then their horizontal `G` into row `t` of
+/// the rings ([`SumRings::store_row`]).
+#[inline(always)]
+pub(crate) fn products_then_store<'m, K: KernelSet, R: SumRings<'m, K>>(
+    rings: &mut R,
+    t: usize,
+    input: &ResidualInputs<'_>,
+    rows: StructureRows<'_, 'm>,
+    n: usize,
+) {
+    let StructureRows {
+        int_products,
+        float_products,
+        scratch,
+    } = rows;
+    let products = StructureRows {
+        int_products: &mut *int_products,
+        float_products: &mut *float_products,
+        scratch,
+    };
+    structure_row::<K>(input, products, n);
+    rings.store_row(t, (int_products, float_products), n);
 }
 
 /// What an output row's tail reads besides the sums' rings.

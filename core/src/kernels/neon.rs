@@ -76,8 +76,8 @@ use super::blocked::{
 };
 use crate::schedule::{HALO, SUM_DEPTH};
 use crate::stages::{
-    Pair, ResidualInputs, StructureRows, cut, cut_mut, load_pixels_of, portable_smooth,
-    portable_smoothed_e, vertical_parts_of,
+    Pair, ResidualInputs, cut, cut_mut, load_pixels_of, portable_smooth, portable_smoothed_e,
+    vertical_parts_of,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -762,21 +762,20 @@ const BLOCK: usize = 4;
 
 impl Blocked for Neon {
     /// In one pass ([`structure_sums_steps`]) where the window has two
-    /// blocks of output columns or more; narrower ones through the
-    /// product rows.
+    /// blocks of output columns or more.
     #[inline(always)]
     fn structure_sums(
         self,
         input: &ResidualInputs<'_>,
-        rows: StructureRows<'_, '_>,
         rings: (&mut [i32], &mut [f32], usize),
         n: usize,
-    ) {
-        match StructureInputs::new(input, n) {
-            // SAFETY: NEON is in the build's features (the module's `cfg`).
-            Some(inputs) => unsafe { structure_sums_steps(&inputs, rings) },
-            None => blocked::products_then_sums(self, input, rows, rings, n),
-        }
+    ) -> bool {
+        let Some(inputs) = StructureInputs::new(input, n) else {
+            return false;
+        };
+        // SAFETY: NEON is in the build's features (the module's `cfg`).
+        unsafe { structure_sums_steps(&inputs, rings) };
+        true
     }
 
     #[inline(always)]
