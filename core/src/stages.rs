@@ -244,8 +244,24 @@ pub(crate) fn load_pixels_of([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i1
 /// `Kby3 = [−1 0 1]ᵀ⊗[1 4 1]`, `Box⋆Soby = [−1 −1 0 1 1]ᵀ⊗[1 3 4 3 1]`:
 /// the vertical parts first (`[1 4 1]`, `[1 3 4 3 1]`, `[−1 0 1]`,
 /// `[−1 −1 0 1 1]`, all within ±3060 in i16), then the horizontal ones.
+/// A set may take it in one loop (`KernelSet::boundary_minus_domain`,
+/// keeping the vertical parts in registers).
 #[inline(always)]
 pub fn boundary_minus_domain<K: KernelSet>(
+    d: [&[i16]; 5],
+    vert: &mut [&mut [i16]; 4],
+    e: Pair<'_, i32>,
+    e_smoothed: Pair<'_, i32>,
+    n: usize,
+) {
+    K::boundary_minus_domain(d, vert, e, e_smoothed, n);
+}
+
+/// The portable `KernelSet::boundary_minus_domain`: the vertical parts
+/// into `vert` (`KernelSet::vertical_parts`), then `E` and its horizontal
+/// binomial from them (`KernelSet::smoothed_e`).
+#[inline(always)]
+pub(crate) fn portable_boundary_minus_domain<K: KernelSet>(
     d: [&[i16]; 5],
     vert: &mut [&mut [i16]; 4],
     e: Pair<'_, i32>,

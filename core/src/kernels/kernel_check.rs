@@ -3,7 +3,8 @@
 //! from 0 to [`LEN`] (both parities of the two-column loops, every position
 //! of a partial lane block): the M4F's and M7's assembly (`m4`), which the
 //! firmware runs on the emulated M4 and M7, and aarch64's NEON sums,
-//! tail, bytes, products with their horizontal `G`, `E` and the rows of `d` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
+//! tail, bytes, products with their horizontal `G`, `E` smoothed along
+//! the row, `V`'s vertical binomials and the rows of `d` (`neon`), which `tests/kernel_check.rs` runs under `qemu-aarch64`
 //! (`scripts/embedded-check`). Targets without such loops pass trivially.
 //! Not part of the stable surface.
 
@@ -345,7 +346,7 @@ mod neon {
     use crate::sink::portable_rgb_tail;
     use crate::stages::{
         DN_SCALE, FLOAT_CHANNELS, INT_CHANNELS, ResidualInputs, ScratchRows, StructureRows,
-        load_pixels_of, vertical_parts_of,
+        load_pixels_of,
     };
     use crate::tail::{TailConstants, TailOut};
     use crate::{ByteScale, Pixels};
@@ -376,7 +377,7 @@ mod neon {
             }
             rows += bytes(&mut values, len)?;
             rows += structure(&mut values, len)?;
-            rows += smoothed_e(&mut values, len)?;
+            rows += boundary_minus_domain(&mut values, len)?;
             rows += smooth(&mut values, len)?;
             rows += rows_of_d(&mut values, len)?;
         }
@@ -384,9 +385,7 @@ mod neon {
     }
 
     /// `p0` and `d` of a row (`KernelSet::load_pixels`) from bytes 0 to
-    /// 255, and `E`'s vertical parts (`KernelSet::vertical_parts`) from
-    /// five rows of `d` within ±255 (at its ends one time in four),
-    /// against the portable loops', `len` columns.
+    /// 255 against the portable loop's, `len` columns.
     fn rows_of_d(values: &mut Values, len: usize) -> Result<usize, &'static str> {
         let frames: [[u8; LEN]; 2] =
             core::array::from_fn(|_| core::array::from_fn(|_| values.next() as u8));
@@ -398,47 +397,52 @@ mod neon {
         if p[0] != p[1] || d[0] != d[1] {
             return Err("neon: load_pixels");
         }
-        let d: [[i16; LEN]; 5] =
-            core::array::from_fn(|_| core::array::from_fn(|_| values.within(255) as i16));
-        let d = d.each_ref().map(|r| &r[..len]);
-        let mut parts = [[[0i16; LEN]; 4]; 2];
-        let [want, got] = &mut parts;
-        let [v1, v2, v3, v4] = want.each_mut().map(|r| &mut r[..len]);
-        vertical_parts_of(d, v1, v2, v3, v4);
-        Neon::vertical_parts(d, got.each_mut().map(|r| &mut r[..len]));
-        if parts[0] != parts[1] {
-            return Err("neon: vertical_parts");
-        }
-        Ok(2)
+        Ok(1)
     }
 
-    /// `E` smoothed along the row (`KernelSet::smoothed_e`) against the
-    /// portable loops', `len` outputs from vertical parts `len + 8` wide,
-    /// made (`stages::vertical_parts_of`) from five rows of `d` within
-    /// ±255, at its ends one time in four.
-    fn smoothed_e(values: &mut Values, len: usize) -> Result<usize, &'static str> {
+    /// `E` smoothed along the row (`KernelSet::boundary_minus_domain`)
+    /// against the portable loops', `len` outputs of a window `len + 8`
+    /// wide, from five rows of `d`: within ±255 (at its ends one time in
+    /// four), and ±255 changing sign across one column in every row, or
+    /// across one row in every column, where `E` x or y reaches its bound
+    /// (`132 · 255`) at the edge.
+    fn boundary_minus_domain(values: &mut Values, len: usize) -> Result<usize, &'static str> {
         const COLS: usize = LEN + 8;
         let n = len + 8;
-        let d: [[i16; COLS]; 5] =
+        let random: [[i16; COLS]; 5] =
             core::array::from_fn(|_| core::array::from_fn(|_| values.within(255) as i16));
-        let mut parts = [[0i16; COLS]; 4];
-        let [v1, v2, v3, v4] = parts.each_mut().map(|r| &mut r[..n]);
-        vertical_parts_of(d.each_ref().map(|r| &r[..n]), v1, v2, v3, v4);
-        let vert = parts.each_ref().map(|r| &r[..n]);
-        let mut out = [[[0i32; COLS]; 2]; 2];
-        for (neon, [sx, sy]) in [false, true].into_iter().zip(out.each_mut()) {
-            let (mut ex, mut ey) = ([0i32; COLS], [0i32; COLS]);
-            let e = (&mut ex[..n], &mut ey[..n]);
-            if neon {
-                Neon::smoothed_e(vert, e, (&mut sx[..n], &mut sy[..n]), n);
-            } else {
-                Portable::smoothed_e(vert, e, (&mut sx[..n], &mut sy[..n]), n);
+        let sign = |before: bool| if before { 255 } else { -255 };
+        let across_columns: [[i16; COLS]; 5] =
+            core::array::from_fn(|_| core::array::from_fn(|c| sign(c < n / 2)));
+        let across_rows: [[i16; COLS]; 5] = core::array::from_fn(|r| [sign(r < 2); COLS]);
+        let negated = |rows: [[i16; COLS]; 5]| rows.map(|row| row.map(|v| -v));
+        let patterns = [
+            random,
+            across_columns,
+            negated(across_columns),
+            across_rows,
+            negated(across_rows),
+        ];
+        for d in &patterns {
+            let d = d.each_ref().map(|r| &r[..n]);
+            let mut out = [[[0i32; COLS]; 2]; 2];
+            for (neon, [sx, sy]) in [false, true].into_iter().zip(out.each_mut()) {
+                let mut parts = [[0i16; COLS]; 4];
+                let mut vert = parts.each_mut().map(|r| &mut r[..n]);
+                let (mut ex, mut ey) = ([0i32; COLS], [0i32; COLS]);
+                let e = (&mut ex[..n], &mut ey[..n]);
+                let e_smoothed = (&mut sx[..n], &mut sy[..n]);
+                if neon {
+                    Neon::boundary_minus_domain(d, &mut vert, e, e_smoothed, n);
+                } else {
+                    Portable::boundary_minus_domain(d, &mut vert, e, e_smoothed, n);
+                }
+            }
+            if out[0] != out[1] {
+                return Err("neon: boundary_minus_domain");
             }
         }
-        if out[0] != out[1] {
-            return Err("neon: smoothed_e");
-        }
-        Ok(1)
+        Ok(patterns.len())
     }
 
     /// `V`'s vertical binomials (`KernelSet::smooth`) against the portable

@@ -49,8 +49,9 @@ use crate::ring::RowRing;
 use crate::schedule::{HALO, SUM_DEPTH, SUM_RADIUS};
 use crate::stages::{
     Binomial, FLOAT_CHANNELS, INT_CHANNELS, Pair, ProductRows, ResidualInputs, StructureRows,
-    binomial_of, horizontal_binomial, portable_products_row, portable_smooth, portable_smoothed_e,
-    running_binomial, sliding_binomial, structure_row, vertical_binomial, vertical_parts_of,
+    binomial_of, horizontal_binomial, portable_boundary_minus_domain, portable_products_row,
+    portable_smooth, portable_smoothed_e, running_binomial, sliding_binomial, structure_row,
+    vertical_binomial, vertical_parts_of,
 };
 use crate::tail::{self, TailConstants, TailOut, TailRows};
 use crate::{ByteScale, ExtremesSink, Pixels};
@@ -113,6 +114,23 @@ pub(crate) trait KernelSet: Copy {
     #[inline(always)]
     fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
         portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
+    }
+
+    /// `E` (x, y) and `E` smoothed along the row on `[4, n − 4)` into
+    /// `e_smoothed`, from the five rows of `d` centred on them (valid on
+    /// `[0, n)`): `stages::portable_boundary_minus_domain`, the vertical
+    /// parts into `vert` ([`Self::vertical_parts`]), then
+    /// [`Self::smoothed_e`] of them. A set may keep the parts in registers
+    /// and leave `vert` and `e` as they were (nothing reads them after).
+    #[inline(always)]
+    fn boundary_minus_domain(
+        d: [&[i16]; 5],
+        vert: &mut [&mut [i16]; 4],
+        e: Pair<'_, i32>,
+        e_smoothed: Pair<'_, i32>,
+        n: usize,
+    ) {
+        portable_boundary_minus_domain::<Self>(d, vert, e, e_smoothed, n);
     }
 
     /// `V`'s vertical binomials on `[4, n − 4)` of both components, from

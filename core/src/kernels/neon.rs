@@ -12,10 +12,12 @@
 //! memory and back between the vertical `G` and the tail.
 //!
 //! The stages before the sums take their narrowest exact lanes: `p0` and
-//! `d` sixteen pixels a step; `E`'s vertical parts, the Sobel gradients
-//! and `E`'s horizontal parts eight columns a step in `i16`; `E` widened
-//! to `i32` and smoothed along the row without leaving the registers
-//! (the portable pass wrote it to a row and read it back at five taps);
+//! `d` sixteen pixels a step; the Sobel gradients eight columns a step in
+//! `i16`; `E` in one loop from `d`, eight columns a step: its vertical
+//! parts and horizontal parts in `i16`, each part's taps shifted out of
+//! the vectors of two steps (`EXT`), `E` widened to `i32` and smoothed
+//! along the row, none of it leaving the registers (the portable pass
+//! wrote the parts and `E` to rows and read them back at five taps);
 //! `V`'s vertical binomials eight columns a step, both components in one
 //! loop; the residual in 64-bit lanes (`SMLSL`, rounded by `SRSHL`), where the
 //! portable loop sums it exactly in two 32-bit halves. Each of these loops
@@ -65,8 +67,9 @@ use core::arch::aarch64::{
     vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
 };
 use core::arch::aarch64::{
-    int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16,
-    vst1q_s16, vst1q_s32_x2, vst1q_u8, vsubl_high_u8, vsubq_s16,
+    int32x4x2_t, vdupq_n_s16, vextq_s16, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32,
+    vmlaq_s16, vmlsl_high_n_s16, vmlsl_n_s16, vmlsq_n_s16, vst1q_s16, vst1q_s32_x2, vst1q_u8,
+    vsubl_high_u8, vsubq_s16,
 };
 
 use super::KernelSet;
@@ -76,8 +79,8 @@ use super::blocked::{
 };
 use crate::schedule::{HALO, SUM_DEPTH};
 use crate::stages::{
-    Pair, ResidualInputs, cut, cut_mut, load_pixels_of, portable_smooth, portable_smoothed_e,
-    vertical_parts_of,
+    Pair, ResidualInputs, cut, cut_mut, load_pixels_of, portable_boundary_minus_domain,
+    portable_smooth,
 };
 use crate::tail::TailConstants;
 use crate::{ByteScale, Extremes, ExtremesSink};
@@ -123,29 +126,23 @@ impl KernelSet for Neon {
         }
     }
 
-    /// [`PARTS_STEP`] columns a step in lanes ([`vertical_parts_steps`]);
-    /// rows shorter than a step by the portable loop.
+    /// [`E_STEP`] columns a step in lanes ([`boundary_minus_domain_steps`]),
+    /// `E`'s vertical parts and `E` itself never leaving them (`vert` and
+    /// `e` are left as they were); rows shorter than two steps by the
+    /// portable loops.
     #[inline(always)]
-    fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) {
-        if d[0].len() < PARTS_STEP {
-            let [v1, v2, v3, v4] = v;
-            vertical_parts_of(d, v1, v2, v3, v4);
-        } else {
-            // SAFETY: NEON is in the build's features (the module's `cfg`).
-            unsafe { vertical_parts_steps(d, v) };
-        }
-    }
-
-    /// [`E_STEP`] columns a step in lanes ([`smoothed_e_steps`]), `E`
-    /// itself never leaving them (`e` is left as it was); rows shorter
-    /// than a step by the portable loops.
-    #[inline(always)]
-    fn smoothed_e(vert: [&[i16]; 4], e: Pair<'_, i32>, e_smoothed: Pair<'_, i32>, n: usize) {
+    fn boundary_minus_domain(
+        d: [&[i16]; 5],
+        vert: &mut [&mut [i16]; 4],
+        e: Pair<'_, i32>,
+        e_smoothed: Pair<'_, i32>,
+        n: usize,
+    ) {
         if n < E_STEP + 8 {
-            portable_smoothed_e::<Self>(vert, e, e_smoothed, n);
+            portable_boundary_minus_domain::<Self>(d, vert, e, e_smoothed, n);
         } else {
             // SAFETY: NEON is in the build's features (the module's `cfg`).
-            unsafe { smoothed_e_steps(vert, e_smoothed, n) };
+            unsafe { boundary_minus_domain_steps(d, e_smoothed, n) };
         }
     }
 
@@ -213,97 +210,137 @@ fn load_pixels_steps([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16], len:
     overlapping_steps::<LOAD_STEP>(len, last, step);
 }
 
-/// Columns a step of [`vertical_parts_steps`]: eight, one vector of `i16`.
-const PARTS_STEP: usize = 8;
-
-/// `E`'s four vertical parts (`stages::vertical_parts_of`, term for term)
-/// of rows at least eight long, eight columns a step, the last step ending
-/// at the rows' end (it writes again, the same values, the columns the
-/// step before it wrote): from `d` (i16, ±255), `v1 = b + 4c + d`
-/// (±1530), `v2 = (a + e) + 3(b + d) + 4c` (±3060), `v3 = d − b` (±510),
-/// `v4 = (d + e) − (a + b)` (±1020), every partial sum within `i16`. Exact.
-#[inline(never)]
-#[target_feature(enable = "neon")]
-fn vertical_parts_steps(rows: [&[i16]; 5], [v1, v2, v3, v4]: [&mut [i16]; 4]) {
-    let len = rows[0].len();
-    let [a, b, c, d, e] = rows.map(|row| row.get(..len));
-    let (Some(a), Some(b), Some(c), Some(d), Some(e)) = (a, b, c, d, e) else {
-        return;
-    };
-    let (Some(v1), Some(v2), Some(v3), Some(v4), Some(last)) = (
-        v1.get_mut(..len),
-        v2.get_mut(..len),
-        v3.get_mut(..len),
-        v4.get_mut(..len),
-        len.checked_sub(PARTS_STEP),
-    ) else {
-        return;
-    };
-    let taps = [a, b, c, d, e].map(<[i16]>::as_ptr);
-    let out = [v1, v2, v3, v4].map(<[i16]>::as_mut_ptr);
-    let step = |i: usize| {
-        // SAFETY: `i ≤ last = len − 8`: columns `i .. i + 8` lie in every
-        // row.
-        unsafe {
-            let [a, b, c, d, e] = taps.map(|row| vld1q_s16(row.add(i)));
-            let b_d = vaddq_s16(b, d);
-            let parts = [
-                vmlaq_n_s16(b_d, c, 4),
-                vmlaq_n_s16(vmlaq_n_s16(vaddq_s16(a, e), b_d, 3), c, 4),
-                vsubq_s16(d, b),
-                vsubq_s16(vaddq_s16(d, e), vaddq_s16(a, b)),
-            ];
-            for (row, part) in out.iter().zip(parts) {
-                vst1q_s16(row.add(i), part);
-            }
-        }
-    };
-    overlapping_steps::<PARTS_STEP>(len, last, step);
+/// `p`, which the compiler can no longer relate to the value it came from:
+/// a row loop's pointers advanced through it stay one register each, which
+/// each load or store advances (`LDP …, [x], #32`), where the compiler
+/// rewrote them as offsets from one index and added it to each pointer
+/// every step (`LDP` takes no register offset).
+#[inline(always)]
+// The template reads no memory through `p`: `nomem` is its contract.
+#[allow(clippy::pointers_in_nomem_asm_block)]
+fn opaque<T>(mut p: *const T) -> *const T {
+    // SAFETY: an empty template: it reads and writes no memory and leaves
+    // the register as it was.
+    unsafe {
+        core::arch::asm!(
+            "/* {0} */",
+            inout(reg) p,
+            options(pure, nomem, nostack, preserves_flags)
+        );
+    }
+    p
 }
 
-/// Output columns a step of [`smoothed_e_steps`]: eight, one vector of `i16`.
+/// `v`, which the compiler can no longer see is a constant: a multiply-add
+/// by a power of two in its lanes stays one `MLA`, where the compiler makes
+/// a known one a shift and an add.
+#[inline(always)]
+fn opaque_lanes(mut v: int16x8_t) -> int16x8_t {
+    // SAFETY: as `opaque`'s, for a vector register.
+    unsafe {
+        core::arch::asm!(
+            "/* {0:v} */",
+            inout(vreg) v,
+            options(pure, nomem, nostack, preserves_flags)
+        );
+    }
+    v
+}
+
+/// Output columns a step of [`boundary_minus_domain_steps`]: eight, one
+/// vector of `i16`.
 const E_STEP: usize = 8;
 
-/// `E` of columns `c .. c + 8` (x, then y; each as two vectors of four
-/// `i32`s) from its vertical parts `v1 … v4` (`stages::boundary_minus_domain_x`
-/// and `_y`, term for term):
+/// `2` and `4` in every lane ([`opaque_lanes`]).
+struct Multipliers {
+    two: int16x8_t,
+    four: int16x8_t,
+}
+
+/// The vertical parts [`e_of`] takes, of the eight columns from `rows`
+/// (`d` of five rows `a … e`) on, `[w, v2, u, v4]`:
 ///
 /// | quantity | format, lanes | bound |
 /// |---|---|---|
-/// | vertical parts `v1, v2, v3, v4` | i16 ×8 | 1530, 3060, 510, 1020 |
-/// | `Kbx3 = v1′ − v1‵`; `Box⋆Sobx = (v2′ + v2″) − (v2‵ + v2‴)` | i16 ×8 | 3060; 12 240 |
-/// | `Kby3 = v3‵ + 4·v3 + v3′`; `Box⋆Soby = (v4‴ + v4″) + 3·(v4‵ + v4′) + 4·v4` | i16 ×8 | 3060; 12 240 |
-/// | `E = Kb3 − 3·Box⋆Sob` (`SMLSL` by 3 of the widened parts) | i32 ×4 | 33 660 |
+/// | `d`: `a, b, c, d, e` | i16 ×8 | 255 |
+/// | `a + e`, `b + d`; `v1 = (b + d) + 4·c` | i16 ×8 | 510; 1530 |
+/// | `v2 = ((a + e) + 2·(b + d)) + v1 = (a + e) + 3·(b + d) + 4·c` | i16 ×8 | 1530 + 1530 = 3060 |
+/// | `w = v1 − 3·v2 = −3·(a + e) − 8·(b + c + d)` | i16 ×8 | 7650 (`3·v2`: 9180) |
+/// | `v3 = d − b`; `v4 = v3 + (e − a) = (d + e) − (a + b)` | i16 ×8 | 510; 1020 |
+/// | `u = v3 − 3·v4 = 3·(a − e) + 2·(b − d)` | i16 ×8 | 2550 (`3·v4`: 3060) |
 ///
-/// (primes: one and two columns right, back-primes left). Exact.
+/// `v1 … v4` are `stages::vertical_parts_of`'s. Exact.
 ///
 /// # Safety
-/// `2 ≤ c` and `c + 10 ≤` every part's length; NEON runs here.
+/// Eight values from each of `rows` are readable; NEON runs here.
 #[inline]
 #[target_feature(enable = "neon")]
-unsafe fn e_at(parts: [*const i16; 4], c: usize) -> [[int32x4_t; 2]; 2] {
-    let [v1, v2, v3, v4] = parts;
-    // SAFETY: the caller's: columns `c − 2 .. c + 10` lie in every part.
-    let at = |row: *const i16, k: usize| unsafe { vld1q_s16(row.add(c + k - 2)) };
-    let kb_x = vsubq_s16(at(v1, 3), at(v1, 1));
-    let bs_x = vsubq_s16(
-        vaddq_s16(at(v2, 3), at(v2, 4)),
-        vaddq_s16(at(v2, 1), at(v2, 0)),
-    );
-    let kb_y = vmlaq_n_s16(vaddq_s16(at(v3, 1), at(v3, 3)), at(v3, 2), 4);
-    let outer = vmlaq_n_s16(
-        vaddq_s16(at(v4, 0), at(v4, 4)),
-        vaddq_s16(at(v4, 1), at(v4, 3)),
-        3,
-    );
-    let bs_y = vmlaq_n_s16(outer, at(v4, 2), 4);
-    let e = |kb: int16x8_t, bs: int16x8_t| {
+unsafe fn parts_at(rows: [*const i16; 5], k: &Multipliers) -> [int16x8_t; 4] {
+    // SAFETY: the caller's.
+    let [a, b, c, d, e] = rows.map(|row| unsafe { vld1q_s16(row) });
+    let (a_e, b_d) = (vaddq_s16(a, e), vaddq_s16(b, d));
+    let v1 = vmlaq_s16(b_d, c, k.four);
+    let v2 = vaddq_s16(vmlaq_s16(a_e, b_d, k.two), v1);
+    let w = vmlsq_n_s16(v1, v2, 3);
+    let v3 = vsubq_s16(d, b);
+    let v4 = vaddq_s16(v3, vsubq_s16(e, a));
+    let u = vmlsq_n_s16(v3, v4, 3);
+    [w, v2, u, v4]
+}
+
+/// Lanes `k … k + 8` of the sixteen `lo`, `hi` (`EXT`; `lo` itself at 0,
+/// `hi` at 8).
+#[inline]
+#[target_feature(enable = "neon")]
+fn lanes_from(lo: int16x8_t, hi: int16x8_t, k: usize) -> int16x8_t {
+    match k {
+        0 => lo,
+        1 => vextq_s16::<1>(lo, hi),
+        2 => vextq_s16::<2>(lo, hi),
+        3 => vextq_s16::<3>(lo, hi),
+        4 => vextq_s16::<4>(lo, hi),
+        5 => vextq_s16::<5>(lo, hi),
+        6 => vextq_s16::<6>(lo, hi),
+        7 => vextq_s16::<7>(lo, hi),
+        _ => hi,
+    }
+}
+
+/// `E` (x, then y; each as two vectors of four `i32`s) of eight columns
+/// whose taps `t = 0 … 4` (column offsets `t − 2`) lie `offset + t` lanes
+/// into the vertical parts ([`parts_at`]) `lo` and `hi` of sixteen
+/// columns: `stages::boundary_minus_domain_x` and `_y` regrouped by tap
+/// (primes: one and two columns right, back-primes left),
+///
+/// | quantity | format, lanes | bound |
+/// |---|---|---|
+/// | `Ax = w′ − w‵ = Kbx3 − 3·(v2′ − v2‵)` | i16 ×8 | 15 300 |
+/// | `Bx = v2″ − v2‴`, so `Ax − 3·Bx = Kbx3 − 3·Box⋆Sobx` | i16 ×8 | 6120 |
+/// | `Ay = (u‵ + u′) + 4·u = Kby3 − 3·((v4‵ + v4′) + 4·v4)` | i16 ×8 | 15 300 (`u‵ + u′`: 5100) |
+/// | `By = (v4‴ + v4″) + 2·(v4‵ + v4′)`, so `Ay − 3·By = Kby3 − 3·Box⋆Soby` | i16 ×8 | 6120 |
+/// | `E = A − 3·B` (`SMLSL` by 3 of the widened parts) | i32 ×4 | 33 660 |
+///
+/// Exact. `offset` is a constant where this is inlined.
+#[inline]
+#[target_feature(enable = "neon")]
+fn e_of(
+    lo: [int16x8_t; 4],
+    hi: [int16x8_t; 4],
+    offset: usize,
+    k: &Multipliers,
+) -> [[int32x4_t; 2]; 2] {
+    let [w, v2, u, v4] = [0, 1, 2, 3].map(|p| move |t: usize| lanes_from(lo[p], hi[p], offset + t));
+    let a_x = vsubq_s16(w(3), w(1));
+    let b_x = vsubq_s16(v2(4), v2(0));
+    let a_y = vmlaq_s16(vaddq_s16(u(1), u(3)), u(2), k.four);
+    let b_y = vmlaq_s16(vaddq_s16(v4(0), v4(4)), vaddq_s16(v4(1), v4(3)), k.two);
+    let e = |a: int16x8_t, b: int16x8_t| {
         [
-            vmlsl_n_s16(vmovl_s16(vget_low_s16(kb)), vget_low_s16(bs), 3),
-            vmlsl_high_n_s16(vmovl_high_s16(kb), bs, 3),
+            vmlsl_n_s16(vmovl_s16(vget_low_s16(a)), vget_low_s16(b), 3),
+            vmlsl_high_n_s16(vmovl_high_s16(a), b, 3),
         ]
     };
-    [e(kb_x, bs_x), e(kb_y, bs_y)]
+    [e(a_x, b_x), e(a_y, b_y)]
 }
 
 /// The horizontal binomial of `E` at the four columns from `E`'s vector
@@ -321,19 +358,23 @@ fn smooth_e(left: int32x4_t, right: int32x4_t) -> int32x4_t {
     binomial_mla(left, b, c, d, right)
 }
 
-/// `E` smoothed along the row on `[4, n − 4)` ([`KernelSet::smoothed_e`])
-/// from the four vertical parts (valid on `[0, n)`, `n ≥ 16`), eight
-/// columns a step: each step's `E` ([`e_at`]) two to ten columns right of
-/// its first output, the four left of them carried from the step before
-/// (the first step's and the last's from one more [`e_at`]); the last
-/// step ends at the row's end (it writes again, the same values, the
-/// columns the step before it wrote).
+/// `E` smoothed along the row on `[4, n − 4)`
+/// ([`KernelSet::boundary_minus_domain`]) from the five rows of `d`
+/// (valid on `[0, n)`, `n ≥ 16`), eight columns a step: each step takes
+/// the vertical parts ([`parts_at`]) of the eight columns `8 + i …` and
+/// those of the eight before them from the step before, `E` ([`e_of`])
+/// six to fourteen columns right of its first output `i`, and the `E` of
+/// the four left of them from the step before. Two steps a pass of the
+/// loop, so that each step's parts and `E` take the registers the step
+/// before the last freed (no moves). The first step's carried values, and
+/// the last's, come from the parts of sixteen columns; the last step ends
+/// at the row's end (it writes again, the same values, the columns the
+/// step before it wrote).
 #[inline(never)]
 #[target_feature(enable = "neon")]
-fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: usize) {
-    let (Some(v1), Some(v2), Some(v3), Some(v4)) =
-        (cut(v1, 0, n), cut(v2, 0, n), cut(v3, 0, n), cut(v4, 0, n))
-    else {
+fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize) {
+    let [a, b, c, dd, e] = d.map(|row| cut(row, 0, n));
+    let (Some(a), Some(b), Some(c), Some(dd), Some(e)) = (a, b, c, dd, e) else {
         return;
     };
     let Some(len) = n.checked_sub(8) else {
@@ -346,30 +387,66 @@ fn smoothed_e_steps([v1, v2, v3, v4]: [&[i16]; 4], (sx, sy): Pair<'_, i32>, n: u
     ) else {
         return;
     };
-    let parts = [v1.as_ptr(), v2.as_ptr(), v3.as_ptr(), v4.as_ptr()];
+    let k = Multipliers {
+        two: opaque_lanes(vdupq_n_s16(2)),
+        four: opaque_lanes(vdupq_n_s16(4)),
+    };
+    let rows = [a, b, c, dd, e].map(<[i16]>::as_ptr);
     let out = [sx.as_mut_ptr(), sy.as_mut_ptr()];
-    // `E` at the four columns left of output `i`'s (window column `4 + i`)
-    // and two right of them: columns `2 + i .. 6 + i`.
-    // SAFETY: `i ≤ last = n − 16`, so `2 ≤ 2 + i` and `2 + i + 10 ≤ n`.
-    let first = |i: usize| unsafe { e_at(parts, 2 + i) }.map(|[low, _]| low);
-    let step = |i: usize, left: [int32x4_t; 2]| {
-        // SAFETY: `i ≤ last = n − 16`, so `2 ≤ 6 + i` and `6 + i + 10 ≤
-        // n`; outputs `i .. i + 8 ≤ len`.
+    // The parts of columns `i … i + 8`, and `E` of columns `2 + i … 6 + i`
+    // (from the parts of `i … i + 16`).
+    // SAFETY: `i ≤ last = n − 16`: columns `i … i + 16` lie in every row.
+    let start = |i: usize| unsafe {
+        let lo = parts_at(rows.map(|row| row.add(i)), &k);
+        let hi = parts_at(rows.map(|row| row.add(i + 8)), &k);
+        (lo, e_of(lo, hi, 0, &k).map(|[left, _]| left))
+    };
+    // Outputs `i … i + 8` (at `out`), from `d` at `8 + i` (at `src`), the
+    // parts of `i … i + 8` and `E` of `2 + i … 6 + i`.
+    let step = |src: [*const i16; 5], out: [*mut i32; 2], lo, left: [int32x4_t; 2]| {
+        // SAFETY: every `src` and `out` lies `i ≤ last = n − 16` columns
+        // into its row: `8 + i + 8 ≤ n` columns of `d`, outputs `i + 8 ≤
+        // len`.
         unsafe {
-            let e = e_at(parts, 6 + i);
+            let hi = parts_at(src, &k);
+            let e = e_of(lo, hi, 4, &k);
             for ((row, [a, b]), left) in out.iter().zip(e).zip(left) {
-                i32::store(row.add(i), smooth_e(left, a));
-                i32::store(row.add(i + 4), smooth_e(a, b));
+                i32::store(*row, smooth_e(left, a));
+                i32::store(row.add(4), smooth_e(a, b));
             }
-            e.map(|[_, b]| b)
+            (hi, e.map(|[_, b]| b))
         }
     };
-    let mut left = first(0);
-    for s in 0..len / E_STEP {
-        left = step(s * E_STEP, left);
+    // SAFETY: after step `s` (`8·(s + 1) ≤ len`), `d` `8·(s + 2) ≤ n`
+    // columns in, outputs `8·(s + 1) ≤ len`: within or one past the rows.
+    let advance = |(src, out): ([*const i16; 5], [*mut i32; 2])| unsafe {
+        (
+            src.map(|row| opaque(row.add(E_STEP))),
+            out.map(|row| opaque(row.add(E_STEP)).cast_mut()),
+        )
+    };
+    let (mut lo, mut left) = start(0);
+    // SAFETY: column 8 of `d`, within its rows (`n ≥ 16`).
+    let mut at = (rows.map(|row| unsafe { row.add(8) }), out);
+    for _ in 0..len / (2 * E_STEP) {
+        (lo, left) = step(at.0, at.1, lo, left);
+        at = advance(at);
+        (lo, left) = step(at.0, at.1, lo, left);
+        at = advance(at);
+    }
+    if len % (2 * E_STEP) >= E_STEP {
+        step(at.0, at.1, lo, left);
     }
     if !len.is_multiple_of(E_STEP) {
-        step(last, first(last));
+        let (lo, left) = start(last);
+        // SAFETY: `last + 16 = n`, `last + 8 = len`.
+        let at = unsafe {
+            (
+                rows.map(|row| row.add(last + 8)),
+                out.map(|row| row.add(last)),
+            )
+        };
+        step(at.0, at.1, lo, left);
     }
 }
 
@@ -414,27 +491,42 @@ fn smooth_steps([ex, ey]: [[&[i32]; 5]; 2], (vx, vy): Pair<'_, i32>, n: usize) {
     };
     let rows = [[ax, bx, cx, dx, fx], [ay, by, cy, dy, fy]].map(|r| r.map(<[i32]>::as_ptr));
     let out = [vx.as_mut_ptr(), vy.as_mut_ptr()];
-    let step = |i: usize| {
+    // Columns `i … i + 8` of every row, from `rows` and `out` `i` columns in.
+    let step = |rows: [[*const i32; 5]; 2], out: [*mut i32; 2]| {
         // SAFETY: `i ≤ last = len − 8`: columns `i .. i + 8` lie in every
         // row.
         unsafe {
             for (taps, row) in rows.iter().zip(out) {
-                let [a, b, c, d, e] = taps.map(|tap| vld1q_s32_x2(tap.add(i)));
+                let [a, b, c, d, e] = taps.map(|tap| vld1q_s32_x2(tap));
                 let sums = int32x4x2_t(
                     binomial_mla(a.0, b.0, c.0, d.0, e.0),
                     binomial_mla(a.1, b.1, c.1, d.1, e.1),
                 );
-                vst1q_s32_x2(row.add(i), sums);
+                vst1q_s32_x2(row, sums);
             }
         }
     };
-    // Whole steps from column 0 (the rows' addresses then advance by a
-    // step, and the loads pair: `LDP`), then the last at `last`.
-    for s in 0..len / SMOOTH_STEP {
-        step(s * SMOOTH_STEP);
+    // Whole steps from column 0, every pointer advanced a step through
+    // [`opaque`] (each load and store then advances its own: `LDP …, [x],
+    // #32`), then the last at `last`.
+    let (mut taps, mut outs) = (rows, out);
+    for _ in 0..len / SMOOTH_STEP {
+        step(taps, outs);
+        // SAFETY: after step `s`, `8·(s + 1) ≤ len` columns in: within or
+        // one past every row.
+        unsafe {
+            taps = taps.map(|r| r.map(|tap| opaque(tap.add(SMOOTH_STEP))));
+            outs = outs.map(|row| opaque(row.add(SMOOTH_STEP)).cast_mut());
+        }
     }
     if !len.is_multiple_of(SMOOTH_STEP) {
-        step(last);
+        // SAFETY: `last = len − 8`.
+        unsafe {
+            step(
+                rows.map(|r| r.map(|tap| tap.add(last))),
+                out.map(|row| row.add(last)),
+            );
+        }
     }
 }
 
