@@ -583,6 +583,57 @@ impl<'a> StructureInputs<'a> {
     }
 }
 
+/// Where [`products_at`] reads: each row of [`StructureInputs`] at one
+/// window column.
+#[derive(Clone, Copy)]
+struct ProductTaps {
+    p0: [*const u8; 3],
+    vx: *const i32,
+    vy: [*const i32; 3],
+    d: *const i16,
+}
+
+impl ProductTaps {
+    /// Column `c` of each row.
+    ///
+    /// # Safety
+    /// `c ≤` every row's length.
+    #[inline(always)]
+    unsafe fn at(inputs: &StructureInputs<'_>, c: usize) -> Self {
+        // SAFETY: the caller's.
+        unsafe {
+            Self {
+                p0: inputs.p0.map(|row| row.as_ptr().add(c)),
+                vx: inputs.vx.as_ptr().add(c),
+                vy: inputs.vy.map(|row| row.as_ptr().add(c)),
+                d: inputs.d.as_ptr().add(c),
+            }
+        }
+    }
+
+    /// [`STRUCTURE_STEP`] columns right ([`opaque`]: each row's own
+    /// register, advanced by its loads).
+    ///
+    /// # Safety
+    /// The columns lie within, or one past, every row.
+    #[inline(always)]
+    unsafe fn advance(self) -> Self {
+        // SAFETY: the caller's.
+        unsafe {
+            Self {
+                p0: self.p0.map(|row| opaque(row.add(STRUCTURE_STEP))),
+                vx: opaque(self.vx.add(STRUCTURE_STEP)),
+                vy: self.vy.map(|row| opaque(row.add(STRUCTURE_STEP))),
+                d: opaque(self.d.add(STRUCTURE_STEP)),
+            }
+        }
+    }
+}
+
+/// Window columns a step of [`structure_sums_steps`]: the products of two
+/// blocks' columns.
+const STRUCTURE_STEP: usize = 2 * BLOCK;
+
 /// The five structure products of eight window columns, as two vectors of
 /// four each: `X², XY, Y²` and `X·Dn′·2⁻²⁰, Y·Dn′·2⁻²⁰`.
 struct Products8 {
@@ -613,34 +664,33 @@ struct Products8 {
 /// no subnormal), and each `f32` product rounds once, as the portable.
 ///
 /// # Safety
-/// `1 ≤ c`, and columns `c − 1 .. c + 9` lie in every row of `inputs`
-/// (`c + 9 ≤` the reach [`StructureInputs::new`] checked); NEON runs here.
+/// Columns `c − 1 .. c + 9` lie in every row `at` points into (at column
+/// `c`); NEON runs here.
 #[inline]
 #[target_feature(enable = "neon")]
-unsafe fn products_at(inputs: &StructureInputs<'_>, c: usize) -> Products8 {
+unsafe fn products_at(inputs: &StructureInputs<'_>, at: &ProductTaps) -> Products8 {
     let StructureInputs {
-        p0: [up, mid, down],
-        vx,
-        vy: [vy_up, vy, vy_down],
-        d,
         kappa: [kappa_high, kappa_low],
         right_shift,
         ..
     } = *inputs;
+    let ProductTaps {
+        p0: [up, mid, down],
+        vx,
+        vy: [vy_up, vy, vy_down],
+        d,
+    } = *at;
     // SAFETY (every load below): the caller's, columns `c − 1 .. c + 9`.
-    let taps = |row: &[u8]| -> [uint8x8_t; 3] {
-        [0, 1, 2].map(|k| unsafe { vld1_u8(row.as_ptr().add(c - 1 + k)) })
+    let taps = |row: *const u8| -> [uint8x8_t; 3] {
+        [0, 1, 2].map(|k| unsafe { vld1_u8(row.add(k).sub(1)) })
     };
     let (pu, pm, pd) = (taps(up), taps(mid), taps(down));
     // Every load before the first use, so that neighbouring four-lane
     // loads pair (`LDP`).
-    let pair = |row: &[i32], from: usize| unsafe {
-        let p = row.as_ptr().add(from);
-        [i32::load(p), i32::load(p.add(4))]
-    };
-    let (vx_l, vx_c, vx_r) = (pair(vx, c - 1), pair(vx, c), pair(vx, c + 1));
-    let (vy_u, vy_c, vy_d) = (pair(vy_up, c), pair(vy, c), pair(vy_down, c));
-    let d = unsafe { vld1q_s16(d.as_ptr().add(c)) };
+    let pair = |p: *const i32| unsafe { [i32::load(p), i32::load(p.add(4))] };
+    let (vx_l, vx_c, vx_r) = unsafe { (pair(vx.sub(1)), pair(vx), pair(vx.add(1))) };
+    let (vy_u, vy_c, vy_d) = (pair(vy_up), pair(vy), pair(vy_down));
+    let d = unsafe { vld1q_s16(d) };
     let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
     let twice_plus = |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
     let x = twice_plus(diff(pu[2], pu[0]), diff(pm[2], pm[0]), diff(pd[2], pd[0]));
@@ -713,12 +763,13 @@ fn along_row_f32(left: float32x4_t, right: float32x4_t) -> float32x4_t {
 /// the products never leaving the lanes: two blocks a step. Block `b`'s
 /// taps start at window column `5 + 4b` (`blocked::horizontal_sums`), so
 /// its sums are [`along_row_s32`] / [`along_row_f32`] of the products of
-/// columns `5 + 4b ..` and `9 + 4b ..`: a step makes the products of the
-/// eight columns from `9 + 4b` ([`products_at`]) and takes those of the
-/// four before from the step before it (the first step makes them: the
-/// upper half of [`products_at`] from column 1). With an odd number of
-/// blocks, the last step covers the last two blocks, the one before
-/// written again with the same sums. Lanes past the row's last output
+/// columns `5 + 4b ..` and `9 + 4b ..`: a step ([`structure_pair`])
+/// makes the products of the eight columns from `9 + 4b`
+/// ([`products_at`]) and takes those of the four before from the step
+/// before it (the first step makes them: the upper half of
+/// [`products_at`] from column 1). With an odd number of blocks, the
+/// first step covers blocks 0 and 1 and the next ones start at block 1
+/// (block 1 written twice, the same sums). Lanes past the row's last output
 /// column get sums of products of the columns after it (bounded like any,
 /// from rows that hold earlier values; the tail discards them). Exact as
 /// [`products_at`] and the binomials are.
@@ -737,54 +788,80 @@ fn structure_sums_steps(
     ) else {
         return;
     };
-    let (int_out, float_out) = (int_ring.as_mut_ptr(), float_ring.as_mut_ptr());
-    // The sums of blocks `b` and `b + 1` from the products of the four
-    // columns before them (`carry`); the products of their last four.
-    let step = |b: usize, carry: Products4| -> Products4 {
-        // SAFETY: `b ≤ blocks − 2`, so `products_at` reads columns from
-        // `4b + 8 ≥ 1` to `4b + 18 ≤ 4·blocks + 10`, the reach checked;
-        // blocks `b` and `b + 1` lie in the rings (their lengths, above),
-        // channel `ch` of a block's slot at `ch · 4` from its first
-        // (`blocked::at`).
-        unsafe {
-            let next = products_at(inputs, 4 * b + 9);
-            for (k, block) in [b, b + 1].into_iter().enumerate() {
-                let (ints, floats) = (
-                    int_out.add(block * int_block),
-                    float_out.add(block * float_block),
-                );
-                let int = |ch: usize| {
-                    let left = if k == 0 {
-                        carry.ints[ch]
-                    } else {
-                        next.ints[ch][0]
-                    };
-                    along_row_s32(left, next.ints[ch][k])
-                };
-                vst1q_s32_x3(ints, int32x4x3_t(int(0), int(1), int(2)));
-                let float = |ch: usize| {
-                    let left = if k == 0 {
-                        carry.floats[ch]
-                    } else {
-                        next.floats[ch][0]
-                    };
-                    along_row_f32(left, next.floats[ch][k])
-                };
-                vst1q_f32_x2(floats, float32x4x2_t(float(0), float(1)));
-            }
-            Products4::upper(&next)
+    let out = (int_ring.as_mut_ptr(), float_ring.as_mut_ptr());
+    // SAFETY: the reach checked (`blocks ≥ 2`): columns 0 .. 10 lie in
+    // every row, and `products_at` at column `4b + 9` reads columns
+    // `4b + 8 .. 4b + 18 ≤ 4·blocks + 10` for every `b ≤ blocks − 2`;
+    // the rings hold blocks `0 .. blocks` (their lengths, above).
+    unsafe {
+        let mut carry = Products4::upper(&products_at(inputs, &ProductTaps::at(inputs, 1)));
+        let mut at = (ProductTaps::at(inputs, 9), out);
+        if blocks % 2 == 1 {
+            // Blocks 0 and 1 first; then pairs from block 1.
+            carry = Products4::lower(&structure_pair(inputs, &at.0, out, carry));
+            at = (
+                ProductTaps::at(inputs, 13),
+                (out.0.add(int_block), out.1.add(float_block)),
+            );
         }
-    };
-    // SAFETY: columns 0 .. 10 lie in every row (the reach, `blocks ≥ 2`).
-    let mut carry = Products4::upper(&unsafe { products_at(inputs, 1) });
-    // `step` called from one place, so that it is inlined.
-    for s in 0..blocks.div_ceil(2) {
-        let b = (2 * s).min(blocks - 2);
-        if b < 2 * s {
-            // SAFETY: columns `4b .. 4b + 10` lie in every row (the reach).
-            carry = Products4::upper(&unsafe { products_at(inputs, 4 * b + 1) });
+        for _ in 0..blocks / 2 {
+            carry = Products4::upper(&structure_pair(inputs, &at.0, at.1, carry));
+            at = (
+                at.0.advance(),
+                (
+                    opaque(at.1.0.add(2 * int_block)).cast_mut(),
+                    opaque(at.1.1.add(2 * float_block)).cast_mut(),
+                ),
+            );
         }
-        carry = step(b, carry);
+    }
+}
+
+/// The sums of two blocks, `b` and `b + 1`, into their slot at `out`,
+/// from the products of the four columns before them (`carry`): the
+/// products of their columns (`at`, window column `4b + 9`), which it
+/// returns.
+///
+/// # Safety
+/// As [`products_at`]'s; `out` points to the slot's channels of block
+/// `b`, and block `b + 1` lies in both rings; NEON runs here.
+#[inline(always)]
+unsafe fn structure_pair(
+    inputs: &StructureInputs<'_>,
+    at: &ProductTaps,
+    (ints, floats): (*mut i32, *mut f32),
+    carry: Products4,
+) -> Products8 {
+    let (int_block, float_block) = (ring_block::<BLOCK>(INTS), ring_block::<BLOCK>(FLOATS));
+    // SAFETY: the caller's; channel `ch` of a block's slot at `ch · 4`
+    // from its first (`blocked::at`).
+    unsafe {
+        let next = products_at(inputs, at);
+        for k in 0..2 {
+            let int = |ch: usize| {
+                let left = if k == 0 {
+                    carry.ints[ch]
+                } else {
+                    next.ints[ch][0]
+                };
+                along_row_s32(left, next.ints[ch][k])
+            };
+            let sums = int32x4x3_t(int(0), int(1), int(2));
+            vst1q_s32_x3(ints.add(k * int_block), sums);
+            let float = |ch: usize| {
+                let left = if k == 0 {
+                    carry.floats[ch]
+                } else {
+                    next.floats[ch][0]
+                };
+                along_row_f32(left, next.floats[ch][k])
+            };
+            vst1q_f32_x2(
+                floats.add(k * float_block),
+                float32x4x2_t(float(0), float(1)),
+            );
+        }
+        next
     }
 }
 
@@ -796,6 +873,15 @@ struct Products4 {
 }
 
 impl Products4 {
+    /// Columns `c .. c + 4` of the products of `c .. c + 8`.
+    #[inline(always)]
+    fn lower(products: &Products8) -> Self {
+        Self {
+            ints: products.ints.map(|[low, _]| low),
+            floats: products.floats.map(|[low, _]| low),
+        }
+    }
+
     /// Columns `c + 4 .. c + 8` of the products of `c .. c + 8`.
     #[inline(always)]
     fn upper(products: &Products8) -> Self {
