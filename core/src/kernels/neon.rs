@@ -38,8 +38,8 @@
 //! subnormal: the products are 0 or at least 2⁻²⁰), so `fma(a + e, b + d,
 //! 4)` rounds the same sum once, as the two steps do. Integer binomials
 //! take two multiply-adds by a constant (`MLA`), exact as every sum is;
-//! the tail's `4·a + λ4` one. A constant that is a power of two is
-//! [`held`] in a register, so that its multiply-add stays one `MLA`.
+//! a constant that is a power of two is [`held`] in a register, so that
+//! its multiply-add stays one `MLA`.
 //! `FMAX` takes the
 //! determinant's clamp: it differs from the portable select only on NaNs
 //! and signed zeros, and the determinant is neither (`tail`'s table).
@@ -856,8 +856,6 @@ unsafe fn block_sums<const FIRST: usize>(
 /// The constants of the tail in lanes.
 struct Constants {
     lambda4: int32x4_t,
-    /// 4, [`held`]: `4·a + λ4` one `MLA`.
-    four: int32x4_t,
     det_floor: float32x4_t,
     v_d: float32x4_t,
     v_c: float32x4_t,
@@ -879,7 +877,6 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
     };
     let c = Constants {
         lambda4: vdupq_n_s32(k.lambda4),
-        four: held(4),
         det_floor: vdupq_n_f32(k.units.det_floor),
         v_d: vdupq_n_f32(k.units.v_d),
         v_c: vdupq_n_f32(k.units.v_c),
@@ -970,8 +967,7 @@ struct Pixels {
 }
 
 /// The tail of four pixels: `tail::solve` and the magnitudes, operation
-/// for operation (`4·a + λ4` one `MLA` by the held 4: the same exact
-/// `i32`).
+/// for operation.
 #[inline]
 #[target_feature(enable = "neon")]
 fn pixels(
@@ -980,8 +976,8 @@ fn pixels(
     [p, q]: [FloatLanes<BLOCK>; FLOATS],
     v: [int32x4_t; 2],
 ) -> Pixels {
-    let a4 = vcvtq_f32_s32(vmlaq_s32(c.lambda4, a, c.four));
-    let c4 = vcvtq_f32_s32(vmlaq_s32(c.lambda4, cc, c.four));
+    let a4 = vcvtq_f32_s32(vaddq_s32(vshlq_n_s32::<2>(a), c.lambda4));
+    let c4 = vcvtq_f32_s32(vaddq_s32(vshlq_n_s32::<2>(cc), c.lambda4));
     let b4 = vcvtq_f32_s32(vshlq_n_s32::<2>(b));
     let det = vsubq_f32(vmulq_f32(a4, c4), vmulq_f32(b4, b4));
     // `det > floor ? det : floor` (module doc: no NaN, no zero).
