@@ -60,7 +60,6 @@ use core::arch::aarch64::{
     vsqrtq_f32, vst1q_f32, vst1q_s32, vst3q_u8, vsubq_f32,
 };
 
-use core::arch::aarch64::vmlaq_s32;
 use core::arch::aarch64::{
     int16x8_t, uint8x8_t, vaddq_s16, vcvtq_n_f32_s32, vdupq_n_s64, vget_low_s16, vget_low_s32,
     vld1_u8, vld1q_s16, vmlaq_n_s16, vmlsl_high_s32, vmlsl_s32, vmlsq_n_s32, vmovl_high_s16,
@@ -71,6 +70,7 @@ use core::arch::aarch64::{
     int32x4x2_t, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32, vmlsl_high_n_s16, vmlsl_n_s16,
     vst1q_s16, vst1q_s32_x2, vst1q_u8, vsubl_high_u8, vsubq_s16,
 };
+use core::arch::aarch64::{vmlaq_s16, vmlaq_s32, vreinterpretq_s16_s32};
 use core::arch::asm;
 use core::ops::Range;
 
@@ -292,7 +292,8 @@ const E_STEP: usize = 8;
 /// | `Kby3 = v3‵ + 4·v3 + v3′`; `Box⋆Soby = (v4‴ + v4″) + 3·(v4‵ + v4′) + 4·v4` | i16 ×8 | 3060; 12 240 |
 /// | `E = Kb3 − 3·Box⋆Sob` (`SMLSL` by 3 of the widened parts) | i32 ×4 | 33 660 |
 ///
-/// (primes: one and two columns right, back-primes left). Exact.
+/// (primes: one and two columns right, back-primes left; the 4s [`held`],
+/// one `MLA` each). Exact.
 ///
 /// # Safety
 /// `2 ≤ c` and `c + 10 ≤` every part's length; NEON runs here.
@@ -307,13 +308,14 @@ unsafe fn e_at(parts: [*const i16; 4], c: usize) -> [[int32x4_t; 2]; 2] {
         vaddq_s16(at(v2, 3), at(v2, 4)),
         vaddq_s16(at(v2, 1), at(v2, 0)),
     );
-    let kb_y = vmlaq_n_s16(vaddq_s16(at(v3, 1), at(v3, 3)), at(v3, 2), 4);
+    let four = held_s16(4);
+    let kb_y = vmlaq_s16(vaddq_s16(at(v3, 1), at(v3, 3)), at(v3, 2), four);
     let outer = vmlaq_n_s16(
         vaddq_s16(at(v4, 0), at(v4, 4)),
         vaddq_s16(at(v4, 1), at(v4, 3)),
         3,
     );
-    let bs_y = vmlaq_n_s16(outer, at(v4, 2), 4);
+    let bs_y = vmlaq_s16(outer, at(v4, 2), four);
     let e = |kb: int16x8_t, bs: int16x8_t| {
         [
             vmlsl_n_s16(vmovl_s16(vget_low_s16(kb)), vget_low_s16(bs), 3),
@@ -415,6 +417,14 @@ fn held(k: i32) -> int32x4_t {
         asm!("// {v:v}", v = inout(vreg) v, options(pure, nomem, nostack, preserves_flags));
     }
     v
+}
+
+/// [`held`] in eight `i16` lanes (the same register, reinterpreted).
+#[inline]
+#[target_feature(enable = "neon")]
+fn held_s16(k: i16) -> int16x8_t {
+    let pair = u32::from(k.cast_unsigned()) * 0x0001_0001;
+    vreinterpretq_s16_s32(held(pair.cast_signed()))
 }
 
 /// Columns a step of [`smooth_steps`]: eight, two vectors of `i32`.
