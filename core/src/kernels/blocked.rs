@@ -44,7 +44,7 @@ pub(crate) const fn ring_block<const B: usize>(k: usize) -> usize {
 }
 
 /// Where lane 0 of channel `ch` of slot `slot` of block `b` lies.
-const fn at<const B: usize>(k: usize, b: usize, slot: usize, ch: usize) -> usize {
+pub(crate) const fn at<const B: usize>(k: usize, b: usize, slot: usize, ch: usize) -> usize {
     b * ring_block::<B>(k) + (slot * k + ch) * B
 }
 
@@ -123,6 +123,7 @@ unsafe fn row_sums<T: Lanes<B>, const K: usize, const B: usize>(
 ///
 /// # Safety
 /// Block `b` lies in the ring, and the CPU runs the set's instructions.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn column_sum<T: Lanes<B>, const K: usize, const B: usize>(
     ring: *const T,
@@ -134,10 +135,13 @@ unsafe fn column_sum<T: Lanes<B>, const K: usize, const B: usize>(
 }
 
 /// The vertical `G` of block `b` of each channel: `a, b, c` and `p, q`,
-/// from the five rows of the rings from slot `FIRST` on.
+/// from the five rows of the rings from slot `FIRST` on, each tap one
+/// vector load (the AVX2 set's; the NEON set loads a block whole, four
+/// vectors an instruction: `neon::block_sums`).
 ///
 /// # Safety
 /// Block `b` lies in both rings, and the CPU runs the set's instructions.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub(crate) unsafe fn block_sums<const FIRST: usize, const B: usize>(
     ints: *const i32,

@@ -7,7 +7,8 @@
 //! With it the engine keeps the structure sums in blocks of [`BLOCK`]
 //! output columns (`blocked`: the layout, the horizontal and vertical
 //! `G`), and one loop does an output row's tail, four pixels a step, where
-//! neighbouring vectors load in pairs (`LDP`). The portable layout (a ring
+//! a block of each ring loads whole, four vectors an instruction (`LD1` of
+//! four registers, in `asm!`: [`block_sums`]). The portable layout (a ring
 //! per channel) read 25 rows through 25 pointers and took the sums to
 //! memory and back between the vertical `G` and the tail.
 //!
@@ -38,39 +39,36 @@
 //! d)·4) + c·6`, `(b + d)·4` is exact (a power of two, no overflow, no
 //! subnormal: the products are 0 or at least 2⁻²⁰), so `fma(a + e, b + d,
 //! 4)` rounds the same sum once, as the two steps do. Integer binomials
-//! take two multiply-adds by a constant (`MLA`), exact as every sum is.
+//! take two multiply-adds by a constant (`MLA`), exact as every sum is;
+//! a constant that is a power of two is [`held`] in a register, so that
+//! its multiply-add stays one `MLA`.
 //! `FMAX` takes the
 //! determinant's clamp: it differs from the portable select only on NaNs
 //! and signed zeros, and the determinant is neither (`tail`'s table).
 //!
 //! `unsafe` here: the calls of the `#[target_feature(enable = "neon")]`
 //! functions, which the module's `cfg` (NEON in the build's features)
-//! makes sound, and the loads and stores of four to sixteen lanes, each
-//! within a row whose length is checked once a row.
+//! makes sound, the loads and stores of four to sixteen lanes, each
+//! within a row whose length is checked once a row, and two kinds of
+//! `asm!`: the tail's loads of a ring's block ([`block_sums`]) and an
+//! empty one that hides a constant from the compiler ([`held`]).
 #![allow(unsafe_code)]
 
 use core::arch::aarch64::{
-    float32x4_t, int32x4_t, uint8x16_t, uint8x16x3_t, vaddq_f32, vaddq_s32, vcvtq_f32_s32,
-    vcvtq_u32_f32, vdivq_f32, vdupq_n_f32, vdupq_n_s32, vdupq_n_u32, vfmaq_f32, vld1q_f32,
-    vld1q_s32, vld1q_u8, vmaxq_f32, vmaxq_u32, vmaxvq_u32, vminq_u32, vminvq_u32, vmulq_f32,
-    vqmovn_high_u16, vqmovn_high_u32, vqmovn_u16, vqmovn_u32, vreinterpretq_u32_f32, vshlq_n_s32,
-    vsqrtq_f32, vst1q_f32, vst1q_s32, vst3q_u8, vsubq_f32,
+    float32x4_t, float32x4x2_t, int16x8_t, int32x4_t, int32x4x2_t, int32x4x3_t, int64x2_t,
+    uint8x8_t, uint8x16_t, uint8x16x3_t, vaddq_f32, vaddq_s16, vaddq_s32, vcvtq_f32_s32,
+    vcvtq_n_f32_s32, vcvtq_u32_f32, vdivq_f32, vdupq_n_f32, vdupq_n_s32, vdupq_n_s64, vdupq_n_u32,
+    vextq_f32, vextq_s16, vextq_s32, vfmaq_f32, vget_low_s16, vget_low_s32, vget_low_u8, vld1_u8,
+    vld1q_f32, vld1q_s16, vld1q_s32, vld1q_s32_x2, vld1q_u8, vmaxq_f32, vmaxq_u32, vmaxvq_u32,
+    vminq_u32, vminvq_u32, vmlaq_n_s32, vmlaq_s16, vmlaq_s32, vmlsl_high_n_s16, vmlsl_high_s32,
+    vmlsl_n_s16, vmlsl_s32, vmlsq_n_s16, vmlsq_n_s32, vmovl_high_s16, vmovl_s16, vmull_high_n_s32,
+    vmull_high_s16, vmull_n_s32, vmull_s16, vmulq_f32, vqmovn_high_u16, vqmovn_high_u32,
+    vqmovn_u16, vqmovn_u32, vreinterpretq_s16_s32, vreinterpretq_s16_u16, vreinterpretq_s32_s64,
+    vreinterpretq_u32_f32, vrshlq_s64, vshll_n_u8, vshlq_n_s32, vsqrtq_f32, vst1q_f32,
+    vst1q_f32_x2, vst1q_s16, vst1q_s32, vst1q_s32_x2, vst1q_s32_x3, vst1q_u8, vst3q_u8,
+    vsubl_high_u8, vsubl_u8, vsubq_f32, vsubq_s16, vsubq_s32, vuzp1q_s32,
 };
-
-use core::arch::aarch64::{
-    float32x4x2_t, int32x4x3_t, int64x2_t, vextq_f32, vst1q_f32_x2, vst1q_s32_x3,
-};
-use core::arch::aarch64::{
-    int16x8_t, uint8x8_t, vaddq_s16, vcvtq_n_f32_s32, vdupq_n_s64, vget_low_s16, vget_low_s32,
-    vld1_u8, vld1q_s16, vmlaq_n_s16, vmlsl_high_s32, vmlsl_s32, vmlsq_n_s32, vmovl_high_s16,
-    vmovl_s16, vmull_high_n_s32, vmull_high_s16, vmull_n_s32, vmull_s16, vreinterpretq_s16_u16,
-    vreinterpretq_s32_s64, vrshlq_s64, vshll_n_u8, vsubl_u8, vsubq_s32, vuzp1q_s32,
-};
-use core::arch::aarch64::{
-    int32x4x2_t, vdupq_n_s16, vextq_s16, vextq_s32, vget_low_u8, vld1q_s32_x2, vmlaq_n_s32,
-    vmlaq_s16, vmlsl_high_n_s16, vmlsl_n_s16, vmlsq_n_s16, vst1q_s16, vst1q_s32_x2, vst1q_u8,
-    vsubl_high_u8, vsubq_s16,
-};
+use core::arch::asm;
 
 use super::KernelSet;
 use super::blocked::{
@@ -231,27 +229,11 @@ fn opaque<T>(mut p: *const T) -> *const T {
     p
 }
 
-/// `v`, which the compiler can no longer see is a constant: a multiply-add
-/// by a power of two in its lanes stays one `MLA`, where the compiler makes
-/// a known one a shift and an add.
-#[inline(always)]
-fn opaque_lanes(mut v: int16x8_t) -> int16x8_t {
-    // SAFETY: as `opaque`'s, for a vector register.
-    unsafe {
-        core::arch::asm!(
-            "/* {0:v} */",
-            inout(vreg) v,
-            options(pure, nomem, nostack, preserves_flags)
-        );
-    }
-    v
-}
-
 /// Output columns a step of [`boundary_minus_domain_steps`]: eight, one
 /// vector of `i16`.
 const E_STEP: usize = 8;
 
-/// `2` and `4` in every lane ([`opaque_lanes`]).
+/// `2` and `4` in every lane, [`held`] in registers.
 struct Multipliers {
     two: int16x8_t,
     four: int16x8_t,
@@ -388,8 +370,8 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
         return;
     };
     let k = Multipliers {
-        two: opaque_lanes(vdupq_n_s16(2)),
-        four: opaque_lanes(vdupq_n_s16(4)),
+        two: held_s16(2),
+        four: held_s16(4),
     };
     let rows = [a, b, c, dd, e].map(<[i16]>::as_ptr);
     let out = [sx.as_mut_ptr(), sy.as_mut_ptr()];
@@ -451,12 +433,38 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
 }
 
 /// `(a + e) + 4·(b + d) + 6·c` of exact `i32` lanes, in two multiply-adds
-/// by a constant (four instructions): exact where the sum and every
-/// partial sum lie within `i32` (all of the engine's, within `2²⁸`).
+/// by a constant (four instructions; the 4 [`held`], so that it stays a
+/// multiply-add): exact where the sum and every partial sum lie within
+/// `i32` (all of the engine's, within `2²⁸`).
 #[inline]
 #[target_feature(enable = "neon")]
 fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
-    vmlaq_n_s32(vmlaq_n_s32(vaddq_s32(a, e), vaddq_s32(b, d), 4), c, 6)
+    vmlaq_n_s32(vmlaq_s32(vaddq_s32(a, e), vaddq_s32(b, d), held(4)), c, 6)
+}
+
+/// `k` in every lane, through an empty `asm!` the compiler cannot see
+/// into, so that a multiply-add by it stays one `MLA` (by a power of two
+/// LLVM takes a shift and an add: two instructions). The `asm!` is pure,
+/// so the compiler hoists it out of a loop with the `MOVI`: the constant
+/// is made once and held in a register.
+#[inline]
+#[target_feature(enable = "neon")]
+fn held(k: i32) -> int32x4_t {
+    let mut v = vdupq_n_s32(k);
+    // SAFETY: the template is a comment: no instruction, no memory
+    // touched, the register passed through as it is.
+    unsafe {
+        asm!("// {v:v}", v = inout(vreg) v, options(pure, nomem, nostack, preserves_flags));
+    }
+    v
+}
+
+/// [`held`] in eight `i16` lanes (the same register, reinterpreted).
+#[inline]
+#[target_feature(enable = "neon")]
+fn held_s16(k: i16) -> int16x8_t {
+    let pair = u32::from(k.cast_unsigned()) * 0x0001_0001;
+    vreinterpretq_s16_s32(held(pair.cast_signed()))
 }
 
 /// Columns a step of [`smooth_steps`]: eight, two vectors of `i32`.
@@ -692,7 +700,8 @@ unsafe fn products_at(inputs: &StructureInputs<'_>, at: &ProductTaps) -> Product
     let (vy_u, vy_c, vy_d) = (pair(vy_up), pair(vy), pair(vy_down));
     let d = unsafe { vld1q_s16(d) };
     let diff = |a, b| vreinterpretq_s16_u16(vsubl_u8(a, b));
-    let twice_plus = |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_n_s16(vaddq_s16(a, c), b, 2);
+    let two = held_s16(2);
+    let twice_plus = |a: int16x8_t, b: int16x8_t, c: int16x8_t| vmlaq_s16(vaddq_s16(a, c), b, two);
     let x = twice_plus(diff(pu[2], pu[0]), diff(pm[2], pm[0]), diff(pd[2], pd[0]));
     let y = twice_plus(diff(pd[0], pu[0]), diff(pd[1], pu[1]), diff(pd[2], pu[2]));
     let square = |a: int16x8_t, b: int16x8_t| {
@@ -1059,6 +1068,92 @@ fn horizontal_sums_neon(
     unsafe { blocked::horizontal_sums::<BLOCK>(ints, floats, rings, n) }
 }
 
+/// Values a block of the integer sums' ring and of the `f32` sums' ring
+/// (`blocked::ring_block`): fifteen and ten vectors of four lanes.
+const INT_BLOCK: usize = blocked::ring_block::<BLOCK>(INTS);
+const FLOAT_BLOCK: usize = blocked::ring_block::<BLOCK>(FLOATS);
+const _: () = assert!(INT_BLOCK == 60 && FLOAT_BLOCK == 40);
+
+/// [`blocked::block_sums`] of the block whose rings' values start at
+/// `*ints` and `*floats` (the five rows from slot `FIRST` on), which then
+/// point to the next block: the whole block loaded four vectors an
+/// instruction (`LD1` of four registers, the pointer advanced by the
+/// load: four of the integer ring, three of the `f32` ring, where the
+/// vectors one at a time take thirteen `LDP`s and `LDR`s and an `ADD`),
+/// each channel's taps then picked from them in the binomial's order
+/// ([`binomial_mla`], [`binomial_f`]).
+///
+/// The loads are `asm!`: the intrinsics of multi-register `LD1`
+/// (`vld1q_s32_x4`) reach LLVM as plain loads, which it takes as `LDP`s.
+/// `LD1`'s registers are consecutive, so each `asm!` names its own
+/// (`v16` on; the integer ring's are dead once its sums are taken, and
+/// the `f32` ring's take the same).
+///
+/// # Safety
+/// `*ints` points to [`INT_BLOCK`] readable values and `*floats` to
+/// [`FLOAT_BLOCK`]; NEON runs here.
+#[inline]
+#[target_feature(enable = "neon")]
+unsafe fn block_sums<const FIRST: usize>(
+    ints: &mut *const i32,
+    floats: &mut *const f32,
+) -> ([IntLanes<BLOCK>; INTS], [FloatLanes<BLOCK>; FLOATS]) {
+    // The vector of channel `ch` of tap `k` (slot `(FIRST + k) mod 5`) of
+    // a ring of `channels`.
+    let tap = |channels: usize, ch: usize, k: usize| {
+        blocked::at::<BLOCK>(channels, 0, (FIRST + k) % SUM_DEPTH, ch) / BLOCK
+    };
+    let int: [int32x4_t; INT_BLOCK / BLOCK];
+    let (i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14);
+    // SAFETY: the caller's: the sixty values (240 bytes) from `*ints`
+    // are readable; the `asm!` reads them, advances the pointer past
+    // them and writes only its output registers.
+    unsafe {
+        asm!(
+            "ld1 {{ v16.4s, v17.4s, v18.4s, v19.4s }}, [{p}], #64",
+            "ld1 {{ v20.4s, v21.4s, v22.4s, v23.4s }}, [{p}], #64",
+            "ld1 {{ v24.4s, v25.4s, v26.4s, v27.4s }}, [{p}], #64",
+            "ld1 {{ v28.4s, v29.4s, v30.4s }}, [{p}], #48",
+            p = inout(reg) *ints,
+            out("v16") i0, out("v17") i1, out("v18") i2, out("v19") i3,
+            out("v20") i4, out("v21") i5, out("v22") i6, out("v23") i7,
+            out("v24") i8, out("v25") i9, out("v26") i10, out("v27") i11,
+            out("v28") i12, out("v29") i13, out("v30") i14,
+            options(pure, readonly, nostack, preserves_flags),
+        );
+        int = [
+            i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14,
+        ];
+    }
+    let sum_int = |ch: usize| {
+        let t = |k: usize| int[tap(INTS, ch, k)];
+        binomial_mla(t(0), t(1), t(2), t(3), t(4))
+    };
+    let abc = [sum_int(0), sum_int(1), sum_int(2)];
+    let float: [float32x4_t; FLOAT_BLOCK / BLOCK];
+    let (f0, f1, f2, f3, f4, f5, f6, f7, f8, f9);
+    // SAFETY: the caller's: the forty values (160 bytes) from `*floats`
+    // are readable; as above.
+    unsafe {
+        asm!(
+            "ld1 {{ v16.4s, v17.4s, v18.4s, v19.4s }}, [{p}], #64",
+            "ld1 {{ v20.4s, v21.4s, v22.4s, v23.4s }}, [{p}], #64",
+            "ld1 {{ v24.4s, v25.4s }}, [{p}], #32",
+            p = inout(reg) *floats,
+            out("v16") f0, out("v17") f1, out("v18") f2, out("v19") f3,
+            out("v20") f4, out("v21") f5, out("v22") f6, out("v23") f7,
+            out("v24") f8, out("v25") f9,
+            options(pure, readonly, nostack, preserves_flags),
+        );
+        float = [f0, f1, f2, f3, f4, f5, f6, f7, f8, f9];
+    }
+    let sum_float = |ch: usize| {
+        let t = |k: usize| float[tap(FLOATS, ch, k)];
+        binomial_f(t(0), t(1), t(2), t(3), t(4))
+    };
+    (abc, [sum_float(0), sum_float(1)])
+}
+
 /// The constants of the tail in lanes.
 struct Constants {
     lambda4: int32x4_t,
@@ -1102,13 +1197,16 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
     let empty = Extremes::EMPTY;
     let mut min = [vdupq_n_u32(empty.min.to_bits()); 2];
     let mut max = [vdupq_n_u32(empty.max.to_bits()); 2];
+    // Block `b`'s values in the rings, advanced a block a step.
+    let (mut int_at, mut float_at) = (ints, floats);
     for b in 0..whole {
         let at = BLOCK * b;
-        // SAFETY: block `b < nb` lies in both rings, and `at + 4 ≤ w`
-        // in `V` and the outputs (the fields when `FIELDS`): the lengths
-        // `tail_v` checked; NEON is enabled here.
+        // SAFETY: block `b < nb` lies in both rings (`int_at`, `float_at`
+        // point to it: `b` blocks advanced), and `at + 4 ≤ w` in `V` and
+        // the outputs (the fields when `FIELDS`): the lengths `tail_v`
+        // checked; NEON is enabled here.
         unsafe {
-            let (abc, pq) = blocked::block_sums::<FIRST, BLOCK>(ints, floats, b);
+            let (abc, pq) = block_sums::<FIRST>(&mut int_at, &mut float_at);
             let v = [
                 i32::load(vx.as_ptr().add(at)),
                 i32::load(vy.as_ptr().add(at)),
@@ -1142,7 +1240,10 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
         // SAFETY: block `whole < nb` lies in both rings; `V` and the
         // results are local arrays of four lanes; NEON is enabled here.
         unsafe {
-            let (abc, pq) = blocked::block_sums::<FIRST, BLOCK>(ints, floats, whole);
+            let (abc, pq) = block_sums::<FIRST>(
+                &mut ints.add(whole * INT_BLOCK),
+                &mut floats.add(whole * FLOAT_BLOCK),
+            );
             let v = [i32::load(vx.as_ptr()), i32::load(vy.as_ptr())];
             let px = pixels(&c, abc, pq, v);
             for (row, lanes) in local.iter_mut().zip(outputs::<FIELDS>(&c, &px)) {
