@@ -40,8 +40,9 @@
 //! subnormal: the products are 0 or at least 2⁻²⁰), so `fma(a + e, b + d,
 //! 4)` rounds the same sum once, as the two steps do. Integer binomials
 //! take two multiply-adds by a constant (`MLA`), exact as every sum is;
-//! a constant that is a power of two is [`held`] in a register, so that
-//! its multiply-add stays one `MLA`.
+//! the binomials' constants are [`held`] in registers, so that a
+//! multiply-add by a power of two stays one `MLA` and none is made again
+//! each step.
 //! `FMAX` takes the
 //! determinant's clamp: it differs from the portable select only on NaNs
 //! and signed zeros, and the determinant is neither (`tail`'s table).
@@ -60,12 +61,12 @@ use core::arch::aarch64::{
     vcvtq_n_f32_s32, vcvtq_u32_f32, vdivq_f32, vdupq_n_f32, vdupq_n_s32, vdupq_n_s64, vdupq_n_u32,
     vextq_f32, vextq_s16, vextq_s32, vfmaq_f32, vget_low_s16, vget_low_s32, vget_low_u8, vld1_u8,
     vld1q_f32, vld1q_s16, vld1q_s32, vld1q_s32_x2, vld1q_u8, vmaxq_f32, vmaxq_u32, vmaxvq_u32,
-    vminq_u32, vminvq_u32, vmlaq_n_s32, vmlaq_s16, vmlaq_s32, vmlsl_high_n_s16, vmlsl_high_s32,
-    vmlsl_n_s16, vmlsl_s32, vmlsq_n_s16, vmlsq_n_s32, vmovl_high_s16, vmovl_s16, vmull_high_n_s32,
+    vminq_u32, vminvq_u32, vmlaq_s16, vmlaq_s32, vmlsl_high_n_s16, vmlsl_high_s32, vmlsl_n_s16,
+    vmlsl_s32, vmlsq_n_s16, vmlsq_n_s32, vmovl_high_s16, vmovl_s16, vmull_high_n_s32,
     vmull_high_s16, vmull_n_s32, vmull_s16, vmulq_f32, vqmovn_high_u16, vqmovn_high_u32,
-    vqmovn_u16, vqmovn_u32, vreinterpretq_s16_s32, vreinterpretq_s16_u16, vreinterpretq_s32_s64,
-    vreinterpretq_u32_f32, vrshlq_s64, vshll_n_u8, vshlq_n_s32, vsqrtq_f32, vst1q_f32,
-    vst1q_f32_x2, vst1q_s16, vst1q_s32, vst1q_s32_x2, vst1q_s32_x3, vst1q_u8, vst3q_u8,
+    vqmovn_u16, vqmovn_u32, vreinterpretq_f32_s32, vreinterpretq_s16_s32, vreinterpretq_s16_u16,
+    vreinterpretq_s32_s64, vreinterpretq_u32_f32, vrshlq_s64, vshll_n_u8, vshlq_n_s32, vsqrtq_f32,
+    vst1q_f32, vst1q_f32_x2, vst1q_s16, vst1q_s32, vst1q_s32_x2, vst1q_s32_x3, vst1q_u8, vst3q_u8,
     vsubl_high_u8, vsubl_u8, vsubq_f32, vsubq_s16, vsubq_s32, vuzp1q_s32,
 };
 use core::arch::asm;
@@ -433,13 +434,17 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
 }
 
 /// `(a + e) + 4·(b + d) + 6·c` of exact `i32` lanes, in two multiply-adds
-/// by a constant (four instructions; the 4 [`held`], so that it stays a
-/// multiply-add): exact where the sum and every partial sum lie within
+/// by a constant (four instructions; the 4 and the 6 [`held`], so that
+/// they stay multiply-adds, made once): exact where the sum and every partial sum lie within
 /// `i32` (all of the engine's, within `2²⁸`).
 #[inline]
 #[target_feature(enable = "neon")]
 fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
-    vmlaq_n_s32(vmlaq_s32(vaddq_s32(a, e), vaddq_s32(b, d), held(4)), c, 6)
+    vmlaq_s32(
+        vmlaq_s32(vaddq_s32(a, e), vaddq_s32(b, d), held(4)),
+        c,
+        held(6),
+    )
 }
 
 /// `k` in every lane, through an empty `asm!` the compiler cannot see
@@ -457,6 +462,13 @@ fn held(k: i32) -> int32x4_t {
         asm!("// {v:v}", v = inout(vreg) v, options(pure, nomem, nostack, preserves_flags));
     }
     v
+}
+
+/// [`held`] in four `f32` lanes (the same register, reinterpreted).
+#[inline]
+#[target_feature(enable = "neon")]
+fn held_f32(k: f32) -> float32x4_t {
+    vreinterpretq_f32_s32(held(k.to_bits().cast_signed()))
 }
 
 /// [`held`] in eight `i16` lanes (the same register, reinterpreted).
@@ -1001,8 +1013,8 @@ fn binomial_f(
     d: float32x4_t,
     e: float32x4_t,
 ) -> float32x4_t {
-    let sum = vfmaq_f32(vaddq_f32(a, e), vaddq_f32(b, d), vdupq_n_f32(4.0));
-    vaddq_f32(sum, vmulq_f32(c, vdupq_n_f32(6.0)))
+    let sum = vfmaq_f32(vaddq_f32(a, e), vaddq_f32(b, d), held_f32(4.0));
+    vaddq_f32(sum, vmulq_f32(c, held_f32(6.0)))
 }
 
 /// Exact `i32` sums, four a vector ([`binomial_mla`]).
