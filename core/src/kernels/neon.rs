@@ -435,8 +435,8 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
 
 /// `(a + e) + 4·(b + d) + 6·c` of exact `i32` lanes, in two multiply-adds
 /// by a constant (four instructions; the 4 and the 6 [`held`], so that
-/// they stay multiply-adds, made once): exact where the sum and every partial sum lie within
-/// `i32` (all of the engine's, within `2²⁸`).
+/// they stay multiply-adds, made once): exact where the sum and every
+/// partial sum lie within `i32` (all of the engine's, within `2²⁸`).
 #[inline]
 #[target_feature(enable = "neon")]
 fn binomial_mla(a: int32x4_t, b: int32x4_t, c: int32x4_t, d: int32x4_t, e: int32x4_t) -> int32x4_t {
