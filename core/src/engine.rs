@@ -613,6 +613,7 @@ impl<K: KernelSet> Pass<'_, K> {
                 let out = TailOut {
                     m: [&mut *m_d, &mut *m_c],
                     fields: None,
+                    extremes: true,
                 };
                 let found = rows.sums.tail_row(row, out);
                 let extremes = found.unwrap_or_else(|| ExtremesSink::of_rows(m_d, m_c));
@@ -625,6 +626,7 @@ impl<K: KernelSet> Pass<'_, K> {
         let out = TailOut {
             m: rows.magnitudes.each_mut().map(|row| first_mut(row, width)),
             fields: reads_fields.then_some([v_c_x, v_c_y, v_d_x, v_d_y]),
+            extremes: false,
         };
         rows.sums.tail_row(row, out);
         let [m_d, m_c] = rows.magnitudes.each_ref().map(|row| first(row, width));

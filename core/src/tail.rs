@@ -54,6 +54,11 @@ pub struct TailOut<'a> {
     pub m: [&'a mut [f32]; 2],
     /// `v_c`, `v_d`, or `None` when no sink reads them.
     pub fields: Option<[&'a mut [f32]; 4]>,
+    /// Whether the caller takes the magnitudes' extremes from a set that
+    /// finds them as it writes them (`kernels::SumRings::tail_row`), where
+    /// no fields are written: a sink that keeps the magnitudes for a
+    /// per-frame min–max does; the others are spared them.
+    pub extremes: bool,
 }
 
 /// What the tail needs of the configuration.
@@ -120,6 +125,7 @@ pub(crate) fn tail_row(k: &TailConstants, rows: &TailRows<'_>, out: TailOut<'_>)
     let TailOut {
         m: [m_d, m_c],
         fields,
+        ..
     } = out;
     match fields {
         // Two instances, so that the magnitudes' loop writes nothing else.
@@ -385,6 +391,7 @@ mod tests {
                 let out = TailOut {
                     m: m.each_mut().map(|r| &mut r[..]),
                     fields: with_fields.then_some([f0, f1, f2, f3]),
+                    extremes: false,
                 };
                 tail_row(&k, &rows, out);
                 for i in 0..width {

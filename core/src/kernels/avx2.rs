@@ -92,7 +92,7 @@ impl Blocked for Avx2 {
     }
 
     #[inline(always)]
-    fn tail_row<const FIELDS: bool, const FIRST: usize>(
+    fn tail_row<const FIELDS: bool, const EXTREMES: bool, const FIRST: usize>(
         self,
         k: &TailConstants,
         rows: &BlockedRows<'_>,
@@ -100,7 +100,7 @@ impl Blocked for Avx2 {
         fields: [&mut [f32]; 4],
     ) -> ExtremesSink {
         // SAFETY: the token proves AVX2 and FMA.
-        unsafe { tail_row_avx2::<FIELDS, FIRST>(k, rows, m, fields) }
+        unsafe { tail_row_avx2::<FIELDS, EXTREMES, FIRST>(k, rows, m, fields) }
     }
 }
 
@@ -199,7 +199,7 @@ struct Constants {
 
 /// [`Blocked::tail_row`] in AVX2 lanes.
 #[target_feature(enable = "avx2,fma")]
-fn tail_row_avx2<const FIELDS: bool, const FIRST: usize>(
+fn tail_row_avx2<const FIELDS: bool, const EXTREMES: bool, const FIRST: usize>(
     k: &TailConstants,
     rows: &BlockedRows<'_>,
     [m_d, m_c]: [&mut [f32]; 2],
@@ -243,7 +243,7 @@ fn tail_row_avx2<const FIELDS: bool, const FIRST: usize>(
                 i32::load(vy.as_ptr().add(at)),
             ];
             let px = pixels(&c, abc, pq, v);
-            if !FIELDS {
+            if EXTREMES {
                 let bits = [_mm256_castps_si256(px.m_d), _mm256_castps_si256(px.m_c)];
                 for k in 0..2 {
                     min[k] = _mm256_min_epu32(min[k], bits[k]);

@@ -274,8 +274,9 @@ pub(crate) trait Blocked: KernelSet {
     /// first of its five rows in slot `FIRST`), the solve and the
     /// magnitudes (and the fields when `FIELDS`), `B` pixels a step, for
     /// the `w` output columns of a window of `n` (the outputs' length;
-    /// shorter rows write nothing).
-    fn tail_row<const FIELDS: bool, const FIRST: usize>(
+    /// shorter rows write nothing); the magnitudes' extremes when
+    /// `EXTREMES` (the others' are not to be read).
+    fn tail_row<const FIELDS: bool, const EXTREMES: bool, const FIRST: usize>(
         self,
         k: &TailConstants,
         rows: &BlockedRows<'_>,
@@ -337,17 +338,29 @@ impl<'m, S: Blocked> SumRings<'m, S> for BlockedSums<'m, S> {
             first_slot: (o - SUM_RADIUS) % SUM_DEPTH,
             v,
         };
-        let TailOut { m, fields } = out;
-        Some(match fields {
-            None => by_slot::<S, false>(
+        let TailOut {
+            m,
+            fields,
+            extremes,
+        } = out;
+        let no_fields = || -> [&mut [f32]; 4] { [&mut [], &mut [], &mut [], &mut []] };
+        match (fields, extremes) {
+            (None, true) => Some(by_slot::<S, false, true>(
                 self.set,
                 constants,
                 &rows,
                 m,
-                [&mut [], &mut [], &mut [], &mut []],
-            ),
-            Some(fields) => by_slot::<S, true>(self.set, constants, &rows, m, fields),
-        })
+                no_fields(),
+            )),
+            (None, false) => {
+                by_slot::<S, false, false>(self.set, constants, &rows, m, no_fields());
+                None
+            }
+            (Some(fields), _) => {
+                by_slot::<S, true, false>(self.set, constants, &rows, m, fields);
+                None
+            }
+        }
     }
 }
 
@@ -368,7 +381,7 @@ pub(crate) struct BlockedRows<'a> {
 /// sums row, so that every load is at a constant offset from one pointer a
 /// ring.
 #[inline(always)]
-fn by_slot<S: Blocked, const FIELDS: bool>(
+fn by_slot<S: Blocked, const FIELDS: bool, const EXTREMES: bool>(
     set: S,
     k: &TailConstants,
     rows: &BlockedRows<'_>,
@@ -376,11 +389,11 @@ fn by_slot<S: Blocked, const FIELDS: bool>(
     fields: [&mut [f32]; 4],
 ) -> ExtremesSink {
     match rows.first_slot {
-        0 => set.tail_row::<FIELDS, 0>(k, rows, m, fields),
-        1 => set.tail_row::<FIELDS, 1>(k, rows, m, fields),
-        2 => set.tail_row::<FIELDS, 2>(k, rows, m, fields),
-        3 => set.tail_row::<FIELDS, 3>(k, rows, m, fields),
-        _ => set.tail_row::<FIELDS, 4>(k, rows, m, fields),
+        0 => set.tail_row::<FIELDS, EXTREMES, 0>(k, rows, m, fields),
+        1 => set.tail_row::<FIELDS, EXTREMES, 1>(k, rows, m, fields),
+        2 => set.tail_row::<FIELDS, EXTREMES, 2>(k, rows, m, fields),
+        3 => set.tail_row::<FIELDS, EXTREMES, 3>(k, rows, m, fields),
+        _ => set.tail_row::<FIELDS, EXTREMES, 4>(k, rows, m, fields),
     }
 }
 

@@ -300,6 +300,7 @@ mod m4 {
             let out = TailOut {
                 m: want.each_mut().map(|r| &mut r[..len]),
                 fields: None,
+                extremes: false,
             };
             tail_row_portable(&k, &tail_rows, out);
             let mut got = [[0f32; LEN]; 2];
@@ -371,8 +372,8 @@ mod neon {
                     lambda4: config.lambda4,
                     units: config.units(),
                 };
-                for fields in [false, true] {
-                    rows += sums_and_tail(&mut values, &k, len, fields)?;
+                for out in [(false, true), (false, false), (true, false)] {
+                    rows += sums_and_tail(&mut values, &k, len, out)?;
                 }
             }
             rows += bytes(&mut values, len)?;
@@ -526,8 +527,8 @@ mod neon {
                     continue;
                 };
                 let v = [&vx[..n], &vy[1][..n]];
-                let want = portable.tail(o, v, &k, len, false);
-                if neon.tail(o, v, &k, len, false).rows != want.rows {
+                let want = portable.tail(o, v, &k, len, (false, true));
+                if neon.tail(o, v, &k, len, (false, true)).rows != want.rows {
                     return Err("neon: structure sums");
                 }
                 rows += 1;
@@ -697,7 +698,7 @@ mod neon {
             v: [&[i32]; 2],
             k: &TailConstants,
             len: usize,
-            fields: bool,
+            (fields, extremes): (bool, bool),
         ) -> Written {
             let n = len + 2 * HALO;
             let mut out = [[0f32; LEN]; 6];
@@ -715,6 +716,7 @@ mod neon {
                 TailOut {
                     m,
                     fields: fields.then_some([f0, f1, f2, f3]),
+                    extremes,
                 },
             );
             let found =
@@ -727,12 +729,14 @@ mod neon {
         }
     }
 
-    /// Both sets' rings, over windows of `len + 14` columns.
+    /// Both sets' rings, over windows of `len + 14` columns, their tails
+    /// writing the fields or not, and finding the magnitudes' extremes or
+    /// not (`out`: `TailOut::fields`, `TailOut::extremes`).
     fn sums_and_tail(
         values: &mut Values,
         k: &TailConstants,
         len: usize,
-        fields: bool,
+        out: (bool, bool),
     ) -> Result<usize, &'static str> {
         let n = len + 2 * HALO;
         let (mut words, mut floats) = ([[0i32; WORDS]; 2], [[0f32; FLOATS]; 2]);
@@ -749,13 +753,15 @@ mod neon {
                 continue;
             };
             let v = w.v.each_ref().map(|r| &r[..n]);
-            let want = portable.tail(o, v, k, len, fields);
-            let got = neon.tail(o, v, k, len, fields);
+            let want = portable.tail(o, v, k, len, out);
+            let got = neon.tail(o, v, k, len, out);
             if want.rows != got.rows {
                 return Err("neon: sums and tail");
             }
-            // With the fields, the extremes are the engine's to find.
-            if !fields && want.extremes != got.extremes {
+            // The extremes the tail was asked for (the others the
+            // engine's to find).
+            let (_, extremes) = out;
+            if extremes && want.extremes != got.extremes {
                 return Err("neon: extremes");
             }
             rows += 1;

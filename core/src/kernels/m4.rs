@@ -74,6 +74,7 @@ impl KernelSet for M4 {
         if let TailOut {
             m: [m_d, m_c],
             fields: None,
+            ..
         } = out
         {
             let TailRows {

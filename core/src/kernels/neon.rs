@@ -990,7 +990,7 @@ impl Blocked for Neon {
     }
 
     #[inline(always)]
-    fn tail_row<const FIELDS: bool, const FIRST: usize>(
+    fn tail_row<const FIELDS: bool, const EXTREMES: bool, const FIRST: usize>(
         self,
         k: &TailConstants,
         rows: &BlockedRows<'_>,
@@ -998,7 +998,7 @@ impl Blocked for Neon {
         fields: [&mut [f32]; 4],
     ) -> ExtremesSink {
         // SAFETY: NEON is enabled for the whole build (the module's `cfg`).
-        unsafe { tail_row_neon::<FIELDS, FIRST>(k, rows, m, fields) }
+        unsafe { tail_row_neon::<FIELDS, EXTREMES, FIRST>(k, rows, m, fields) }
     }
 }
 
@@ -1177,7 +1177,7 @@ struct Constants {
 /// [`Blocked::tail_row`] in NEON lanes.
 #[inline(never)]
 #[target_feature(enable = "neon")]
-fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
+fn tail_row_neon<const FIELDS: bool, const EXTREMES: bool, const FIRST: usize>(
     k: &TailConstants,
     rows: &BlockedRows<'_>,
     [m_d, m_c]: [&mut [f32]; 2],
@@ -1224,7 +1224,7 @@ fn tail_row_neon<const FIELDS: bool, const FIRST: usize>(
                 i32::load(vy.as_ptr().add(at)),
             ];
             let px = pixels(&c, abc, pq, v);
-            if !FIELDS {
+            if EXTREMES {
                 let bits = [vreinterpretq_u32_f32(px.m_d), vreinterpretq_u32_f32(px.m_c)];
                 for k in 0..2 {
                     min[k] = vminq_u32(min[k], bits[k]);
