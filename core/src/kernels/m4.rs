@@ -256,7 +256,7 @@ pub(crate) fn vertical_parts(d: [&[i16]; 5], v: [&mut [i16]; 4]) -> bool {
     ) else {
         return false;
     };
-    let aligned = |p: *const i16| (p as usize) % 4 == 0;
+    let aligned = |p: *const i16| (p as usize).is_multiple_of(4);
     let words = [a, b, c, dd, e].iter().all(|r| aligned(r.as_ptr()))
         && [&v1, &v2, &v3, &v4].iter().all(|r| aligned(r.as_ptr()));
     if !words {
