@@ -16,9 +16,10 @@
 //!   in a layout of its own (`blocked`, shared with `neon`), which it
 //!   names as its [`KernelSet::Sums`];
 //! - `neon`: the same layout and tail, and the bytes, the rows of `d`,
-//!   `E`, its smoothing along the row and the structure products, in NEON
-//!   lanes for aarch64, fixed at compile time, held equal to their
-//!   portable twins by `kernel_check` under `qemu-aarch64`.
+//!   `E`, its smoothing along the row, `V`, and the structure products
+//!   with their horizontal `G` in one pass, in NEON lanes for aarch64,
+//!   fixed at compile time, held equal to their portable twins by
+//!   `kernel_check` under `qemu-aarch64`.
 //!
 //! [`fpu`] holds the two per-target instructions the portable code itself
 //! calls (the `f32` square root, the byte of a clamped value).

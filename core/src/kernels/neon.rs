@@ -6,11 +6,15 @@
 //!
 //! With it the engine keeps the structure sums in blocks of [`BLOCK`]
 //! output columns (`blocked`: the layout, the horizontal and vertical
-//! `G`), and one loop does an output row's tail, four pixels a step, where
-//! a block of each ring loads whole, four vectors an instruction (`LD1` of
-//! four registers, in `asm!`: [`block_sums`]). The portable layout (a ring
-//! per channel) read 25 rows through 25 pointers and took the sums to
-//! memory and back between the vertical `G` and the tail.
+//! `G`); one pass makes a row's structure products and their horizontal
+//! `G` into the blocks, the products never stored
+//! ([`structure_sums_steps`]); and one loop does an output row's tail,
+//! four pixels a step, where a block of each ring loads whole, four
+//! vectors an instruction (`LD1` of four registers, in `asm!`:
+//! [`block_sums`]), finding the magnitudes' extremes only for a sink that
+//! takes them. The portable layout (a ring per channel) read 25 rows
+//! through 25 pointers and took the sums to memory and back between the
+//! vertical `G` and the tail.
 //!
 //! The stages before the sums take their narrowest exact lanes: `p0` and
 //! `d` sixteen pixels a step; the Sobel gradients eight columns a step in
