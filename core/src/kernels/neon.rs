@@ -55,8 +55,9 @@
 //! functions, which the module's `cfg` (NEON in the build's features)
 //! makes sound, the loads and stores of four to sixteen lanes, each
 //! within a row whose length is checked once a row, and two kinds of
-//! `asm!`: the tail's loads of a ring's block ([`block_sums`]) and an
-//! empty one that hides a constant from the compiler ([`held`]).
+//! `asm!`: the tail's loads of a ring's block ([`block_sums`]) and empty
+//! ones that hide a constant ([`held`]) or a row's pointer ([`opaque`])
+//! from the compiler.
 #![allow(unsafe_code)]
 
 use core::arch::aarch64::{
