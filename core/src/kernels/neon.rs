@@ -79,7 +79,6 @@ use core::arch::asm;
 use super::KernelSet;
 use super::blocked::{
     self, Blocked, BlockedRows, BlockedSums, FLOATS, FloatLanes, INTS, IntLanes, Lanes, blocks,
-    ring_block,
 };
 use crate::schedule::{HALO, SUM_DEPTH};
 use crate::stages::{
@@ -164,17 +163,6 @@ impl KernelSet for Neon {
     }
 }
 
-/// `step` at columns `0, W, 2W, …` of a row of `len ≥ W` columns, the
-/// last step at `last = len − W`, overlapping the one before (it writes
-/// again, the same values): whole steps, no scalar remainder. `step` is
-/// called from one place, so that it is inlined.
-#[inline(always)]
-fn overlapping_steps<const W: usize>(len: usize, last: usize, mut step: impl FnMut(usize)) {
-    for s in 0..len.div_ceil(W) {
-        step((s * W).min(last));
-    }
-}
-
 /// Pixels a step of [`load_pixels_steps`]: sixteen bytes.
 const LOAD_STEP: usize = 16;
 
@@ -211,7 +199,10 @@ fn load_pixels_steps([prev, next]: [&[u8]; 2], p: &mut [u8], d: &mut [i16], len:
             vst1q_s16(d.add(i + 8), vreinterpretq_s16_u16(vsubl_high_u8(b, a)));
         }
     };
-    overlapping_steps::<LOAD_STEP>(len, last, step);
+    // `step` called from one place, so that it is inlined.
+    for s in 0..len.div_ceil(LOAD_STEP) {
+        step((s * LOAD_STEP).min(last));
+    }
 }
 
 /// `p`, which the compiler can no longer relate to the value it came from:
@@ -226,7 +217,7 @@ fn opaque<T>(mut p: *const T) -> *const T {
     // SAFETY: an empty template: it reads and writes no memory and leaves
     // the register as it was.
     unsafe {
-        core::arch::asm!(
+        asm!(
             "/* {0} */",
             inout(reg) p,
             options(pure, nomem, nostack, preserves_flags)
@@ -331,21 +322,6 @@ fn e_of(
     [e(a_x, b_x), e(a_y, b_y)]
 }
 
-/// The horizontal binomial of `E` at the four columns from `E`'s vector
-/// `left` on, from `left` and the vector `right` after it: [`binomial_mla`]
-/// of the taps `left`, its three shifts into `right` and `right`. Exact:
-/// within `16 · 33 660 < 2²⁰`.
-#[inline]
-#[target_feature(enable = "neon")]
-fn smooth_e(left: int32x4_t, right: int32x4_t) -> int32x4_t {
-    let (b, c, d) = (
-        vextq_s32::<1>(left, right),
-        vextq_s32::<2>(left, right),
-        vextq_s32::<3>(left, right),
-    );
-    binomial_mla(left, b, c, d, right)
-}
-
 /// `E` smoothed along the row on `[4, n − 4)`
 /// ([`KernelSet::boundary_minus_domain`]) from the five rows of `d`
 /// (valid on `[0, n)`, `n ≥ 16`), eight columns a step: each step takes
@@ -399,8 +375,8 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
             let hi = parts_at(src, &k);
             let e = e_of(lo, hi, 4, &k);
             for ((row, [a, b]), left) in out.iter().zip(e).zip(left) {
-                i32::store(*row, smooth_e(left, a));
-                i32::store(row.add(4), smooth_e(a, b));
+                i32::store(*row, along_row_s32(left, a));
+                i32::store(row.add(4), along_row_s32(a, b));
             }
             (hi, e.map(|[_, b]| b))
         }
@@ -759,7 +735,8 @@ unsafe fn products_at(inputs: &StructureInputs<'_>, at: &ProductTaps) -> Product
 
 /// The binomial along the row of four `i32` columns: the taps `left`,
 /// its three shifts into `right` (`EXT`) and `right`, the vector after it
-/// ([`binomial_mla`]).
+/// ([`binomial_mla`]; exact for `E`, within `16 · 33 660 < 2²⁰`, and for
+/// the structure products, within `16 · 2²⁰`).
 #[inline]
 #[target_feature(enable = "neon")]
 fn along_row_s32(left: int32x4_t, right: int32x4_t) -> int32x4_t {
@@ -807,10 +784,9 @@ fn structure_sums_steps(
 ) {
     let blocks = inputs.blocks;
     let slot = slot % SUM_DEPTH;
-    let (int_block, float_block) = (ring_block::<BLOCK>(INTS), ring_block::<BLOCK>(FLOATS));
     let (Some(int_ring), Some(float_ring)) = (
-        int_ring.get_mut(slot * INTS * BLOCK..blocks * int_block),
-        float_ring.get_mut(slot * FLOATS * BLOCK..blocks * float_block),
+        int_ring.get_mut(slot * INTS * BLOCK..blocks * INT_BLOCK),
+        float_ring.get_mut(slot * FLOATS * BLOCK..blocks * FLOAT_BLOCK),
     ) else {
         return;
     };
@@ -827,7 +803,7 @@ fn structure_sums_steps(
             carry = Products4::lower(&structure_pair(inputs, &at.0, out, carry));
             at = (
                 ProductTaps::at(inputs, 13),
-                (out.0.add(int_block), out.1.add(float_block)),
+                (out.0.add(INT_BLOCK), out.1.add(FLOAT_BLOCK)),
             );
         }
         for _ in 0..blocks / 2 {
@@ -835,8 +811,8 @@ fn structure_sums_steps(
             at = (
                 at.0.advance(),
                 (
-                    opaque(at.1.0.add(2 * int_block)).cast_mut(),
-                    opaque(at.1.1.add(2 * float_block)).cast_mut(),
+                    opaque(at.1.0.add(2 * INT_BLOCK)).cast_mut(),
+                    opaque(at.1.1.add(2 * FLOAT_BLOCK)).cast_mut(),
                 ),
             );
         }
@@ -858,40 +834,24 @@ unsafe fn structure_pair(
     (ints, floats): (*mut i32, *mut f32),
     carry: Products4,
 ) -> Products8 {
-    let (int_block, float_block) = (ring_block::<BLOCK>(INTS), ring_block::<BLOCK>(FLOATS));
     // SAFETY: the caller's; channel `ch` of a block's slot at `ch · 4`
     // from its first (`blocked::at`).
     unsafe {
         let next = products_at(inputs, at);
-        for k in 0..2 {
-            let int = |ch: usize| {
-                let left = if k == 0 {
-                    carry.ints[ch]
-                } else {
-                    next.ints[ch][0]
-                };
-                along_row_s32(left, next.ints[ch][k])
-            };
+        let (lower, upper) = (Products4::lower(&next), Products4::upper(&next));
+        for (k, (left, right)) in [(carry, lower), (lower, upper)].into_iter().enumerate() {
+            let int = |ch: usize| along_row_s32(left.ints[ch], right.ints[ch]);
             let sums = int32x4x3_t(int(0), int(1), int(2));
-            vst1q_s32_x3(ints.add(k * int_block), sums);
-            let float = |ch: usize| {
-                let left = if k == 0 {
-                    carry.floats[ch]
-                } else {
-                    next.floats[ch][0]
-                };
-                along_row_f32(left, next.floats[ch][k])
-            };
-            vst1q_f32_x2(
-                floats.add(k * float_block),
-                float32x4x2_t(float(0), float(1)),
-            );
+            vst1q_s32_x3(ints.add(k * INT_BLOCK), sums);
+            let float = |ch: usize| along_row_f32(left.floats[ch], right.floats[ch]);
+            let sums = float32x4x2_t(float(0), float(1));
+            vst1q_f32_x2(floats.add(k * FLOAT_BLOCK), sums);
         }
         next
     }
 }
 
-/// The products of four window columns: the upper half of a [`Products8`].
+/// The products of four window columns: a half of a [`Products8`].
 #[derive(Clone, Copy)]
 struct Products4 {
     ints: [int32x4_t; INTS],
@@ -963,6 +923,12 @@ fn rgb_steps([m_d, m_c]: [&[f32]; 2], luma: &[u8], scales: [[f32; 2]; 2], out: &
 
 /// Output columns a block: one NEON vector of each channel of each row.
 const BLOCK: usize = 4;
+
+/// Values a block of the integer sums' ring and of the `f32` sums' ring
+/// (`blocked::ring_block`): fifteen and ten vectors of four lanes.
+const INT_BLOCK: usize = blocked::ring_block::<BLOCK>(INTS);
+const FLOAT_BLOCK: usize = blocked::ring_block::<BLOCK>(FLOATS);
+const _: () = assert!(INT_BLOCK == 60 && FLOAT_BLOCK == 40);
 
 impl Blocked for Neon {
     /// In one pass ([`structure_sums_steps`]) where the window has two
@@ -1084,12 +1050,6 @@ fn horizontal_sums_neon(
     // SAFETY: NEON is enabled here.
     unsafe { blocked::horizontal_sums::<BLOCK>(ints, floats, rings, n) }
 }
-
-/// Values a block of the integer sums' ring and of the `f32` sums' ring
-/// (`blocked::ring_block`): fifteen and ten vectors of four lanes.
-const INT_BLOCK: usize = blocked::ring_block::<BLOCK>(INTS);
-const FLOAT_BLOCK: usize = blocked::ring_block::<BLOCK>(FLOATS);
-const _: () = assert!(INT_BLOCK == 60 && FLOAT_BLOCK == 40);
 
 /// [`blocked::block_sums`] of the block whose rings' values start at
 /// `*ints` and `*floats` (the five rows from slot `FIRST` on), which then
