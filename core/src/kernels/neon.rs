@@ -230,12 +230,6 @@ fn opaque<T>(mut p: *const T) -> *const T {
 /// vector of `i16`.
 const E_STEP: usize = 8;
 
-/// `2` and `4` in every lane, [`held`] in registers.
-struct Multipliers {
-    two: int16x8_t,
-    four: int16x8_t,
-}
-
 /// The vertical parts [`e_of`] takes, of the eight columns from `rows`
 /// (`d` of five rows `a … e`) on, `[w, v2, u, v4]`:
 ///
@@ -254,12 +248,12 @@ struct Multipliers {
 /// Eight values from each of `rows` are readable; NEON runs here.
 #[inline]
 #[target_feature(enable = "neon")]
-unsafe fn parts_at(rows: [*const i16; 5], k: &Multipliers) -> [int16x8_t; 4] {
+unsafe fn parts_at(rows: [*const i16; 5]) -> [int16x8_t; 4] {
     // SAFETY: the caller's.
     let [a, b, c, d, e] = rows.map(|row| unsafe { vld1q_s16(row) });
     let (a_e, b_d) = (vaddq_s16(a, e), vaddq_s16(b, d));
-    let v1 = vmlaq_s16(b_d, c, k.four);
-    let v2 = vaddq_s16(vmlaq_s16(a_e, b_d, k.two), v1);
+    let v1 = vmlaq_s16(b_d, c, held_s16(4));
+    let v2 = vaddq_s16(vmlaq_s16(a_e, b_d, held_s16(2)), v1);
     let w = vmlsq_n_s16(v1, v2, 3);
     let v3 = vsubq_s16(d, b);
     let v4 = vaddq_s16(v3, vsubq_s16(e, a));
@@ -302,17 +296,16 @@ fn lanes_from(lo: int16x8_t, hi: int16x8_t, k: usize) -> int16x8_t {
 /// Exact. `offset` is a constant where this is inlined.
 #[inline]
 #[target_feature(enable = "neon")]
-fn e_of(
-    lo: [int16x8_t; 4],
-    hi: [int16x8_t; 4],
-    offset: usize,
-    k: &Multipliers,
-) -> [[int32x4_t; 2]; 2] {
+fn e_of(lo: [int16x8_t; 4], hi: [int16x8_t; 4], offset: usize) -> [[int32x4_t; 2]; 2] {
     let [w, v2, u, v4] = [0, 1, 2, 3].map(|p| move |t: usize| lanes_from(lo[p], hi[p], offset + t));
     let a_x = vsubq_s16(w(3), w(1));
     let b_x = vsubq_s16(v2(4), v2(0));
-    let a_y = vmlaq_s16(vaddq_s16(u(1), u(3)), u(2), k.four);
-    let b_y = vmlaq_s16(vaddq_s16(v4(0), v4(4)), vaddq_s16(v4(1), v4(3)), k.two);
+    let a_y = vmlaq_s16(vaddq_s16(u(1), u(3)), u(2), held_s16(4));
+    let b_y = vmlaq_s16(
+        vaddq_s16(v4(0), v4(4)),
+        vaddq_s16(v4(1), v4(3)),
+        held_s16(2),
+    );
     let e = |a: int16x8_t, b: int16x8_t| {
         [
             vmlsl_n_s16(vmovl_s16(vget_low_s16(a)), vget_low_s16(b), 3),
@@ -351,19 +344,15 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
     ) else {
         return;
     };
-    let k = Multipliers {
-        two: held_s16(2),
-        four: held_s16(4),
-    };
     let rows = [a, b, c, dd, e].map(<[i16]>::as_ptr);
     let out = [sx.as_mut_ptr(), sy.as_mut_ptr()];
     // The parts of columns `i … i + 8`, and `E` of columns `2 + i … 6 + i`
     // (from the parts of `i … i + 16`).
     // SAFETY: `i ≤ last = n − 16`: columns `i … i + 16` lie in every row.
     let start = |i: usize| unsafe {
-        let lo = parts_at(rows.map(|row| row.add(i)), &k);
-        let hi = parts_at(rows.map(|row| row.add(i + 8)), &k);
-        (lo, e_of(lo, hi, 0, &k).map(|[left, _]| left))
+        let lo = parts_at(rows.map(|row| row.add(i)));
+        let hi = parts_at(rows.map(|row| row.add(i + 8)));
+        (lo, e_of(lo, hi, 0).map(|[left, _]| left))
     };
     // Outputs `i … i + 8` (at `out`), from `d` at `8 + i` (at `src`), the
     // parts of `i … i + 8` and `E` of `2 + i … 6 + i`.
@@ -372,8 +361,8 @@ fn boundary_minus_domain_steps(d: [&[i16]; 5], (sx, sy): Pair<'_, i32>, n: usize
         // into its row: `8 + i + 8 ≤ n` columns of `d`, outputs `i + 8 ≤
         // len`.
         unsafe {
-            let hi = parts_at(src, &k);
-            let e = e_of(lo, hi, 4, &k);
+            let hi = parts_at(src);
+            let e = e_of(lo, hi, 4);
             for ((row, [a, b]), left) in out.iter().zip(e).zip(left) {
                 i32::store(*row, along_row_s32(left, a));
                 i32::store(row.add(4), along_row_s32(a, b));
