@@ -236,18 +236,13 @@ pub(crate) fn products_then_store<'m, K: KernelSet, R: SumRings<'m, K>>(
     rows: StructureRows<'_, 'm>,
     n: usize,
 ) {
-    let StructureRows {
-        int_products,
-        float_products,
-        scratch,
-    } = rows;
     let products = StructureRows {
-        int_products: &mut *int_products,
-        float_products: &mut *float_products,
-        scratch,
+        int_products: &mut *rows.int_products,
+        float_products: &mut *rows.float_products,
+        scratch: rows.scratch,
     };
     structure_row::<K>(input, products, n);
-    rings.store_row(t, (int_products, float_products), n);
+    rings.store_row(t, (rows.int_products, rows.float_products), n);
 }
 
 /// What an output row's tail reads besides the sums' rings.
